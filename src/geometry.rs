@@ -1,0 +1,199 @@
+//! Frames and transforms of the cell.
+//!
+//! Transforms are named by their frames, `base_from_tcp` maps points given
+//! in the TCP frame into the base frame (it is the TCP's pose in the base).
+//! Lengths are in millimetres throughout, angles in radians.
+//!
+//! The sensor frame is the paper's (Section III): origin at the centre of
+//! taxel c33, x towards c35, y towards c13, z the pad's outward normal. A
+//! cable pressed on the pad is a line in its x–y plane.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use nalgebra::{Isometry2, Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// A straight cable on the pad, as angle and signed offset.
+///
+/// The paper fits `y = m x + n`; a slope blows up for a cable lying along y,
+/// so cablecell keeps the line as its direction angle `alpha_rad` in
+/// (-π/2, π/2] (the paper's `atan m`) and its signed perpendicular distance
+/// `offset_mm` from the sensor's origin along the normal
+/// (-sin α, cos α). For a cable near the x-axis `offset_mm` is the paper's
+/// `n` (exactly `n cos α`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LineInSensor {
+    pub alpha_rad: f64,
+    pub offset_mm: f64,
+}
+
+impl LineInSensor {
+    /// The line of direction angle `alpha_rad` (any value, taken modulo π)
+    /// at signed distance `offset_mm` along the normal (-sin α, cos α).
+    pub fn new(alpha_rad: f64, offset_mm: f64) -> Self {
+        // Subtract k half-turns to land in (-π/2, π/2]; an odd k reverses
+        // the direction, and with it the normal and the offset's sign.
+        let k = ((alpha_rad - FRAC_PI_2) / PI).ceil();
+        let alpha = alpha_rad - k * PI;
+        let offset = if k.rem_euclid(2.0) == 1.0 { -offset_mm } else { offset_mm };
+        Self {
+            alpha_rad: alpha,
+            offset_mm: offset,
+        }
+    }
+
+    /// The line through `point_mm` along `direction` (need not be unit,
+    /// must not be zero).
+    pub fn through(point_mm: Vector2<f64>, direction: Vector2<f64>) -> Self {
+        let alpha = direction.y.atan2(direction.x);
+        let normal = Vector2::new(-alpha.sin(), alpha.cos());
+        Self::new(alpha, normal.dot(&point_mm))
+    }
+
+    /// The paper's slope and intercept `(m, n)` of `y = m x + n`; `None`
+    /// for a line too close to the y-axis to have them.
+    pub fn slope_intercept(&self) -> Option<(f64, f64)> {
+        let cos = self.alpha_rad.cos();
+        (cos.abs() > 1e-9).then(|| (self.alpha_rad.tan(), self.offset_mm / cos))
+    }
+
+    /// Unit normal (-sin α, cos α) along which `offset_mm` is measured.
+    pub fn normal(&self) -> Vector2<f64> {
+        Vector2::new(-self.alpha_rad.sin(), self.alpha_rad.cos())
+    }
+
+    /// Signed distance of a point from the line, along the normal.
+    pub fn distance_mm(&self, point_mm: Vector2<f64>) -> f64 {
+        self.normal().dot(&point_mm) - self.offset_mm
+    }
+
+    /// A frame on the line: origin at the foot of the perpendicular from the
+    /// sensor's origin, x along the line.
+    pub fn sensor_from_line(&self) -> Isometry2<f64> {
+        let foot = self.normal() * self.offset_mm;
+        Isometry2::new(foot, self.alpha_rad)
+    }
+
+    /// How far this line is from `target`: offset difference and angle
+    /// difference wrapped into (-π/2, π/2].
+    pub fn error_to(&self, target: &LineInSensor) -> PoseError {
+        let d_alpha = LineInSensor::new(self.alpha_rad - target.alpha_rad, 0.0).alpha_rad;
+        PoseError {
+            n_mm: self.offset_mm - target.offset_mm,
+            alpha_rad: d_alpha,
+        }
+    }
+
+    /// The line seen from another frame of the pad's plane:
+    /// `other_from_sensor` maps sensor coordinates into that frame.
+    pub fn transformed(&self, other_from_sensor: &Isometry2<f64>) -> LineInSensor {
+        let frame = other_from_sensor * self.sensor_from_line();
+        LineInSensor::through(
+            frame.translation.vector,
+            frame.rotation * Vector2::x(),
+        )
+    }
+}
+
+/// Signed error of a cable pose on the pad against the target pose.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseError {
+    pub n_mm: f64,
+    pub alpha_rad: f64,
+}
+
+impl PoseError {
+    /// Whether both components are within the tolerance (inclusive).
+    pub fn within(&self, tolerance: &PoseError) -> bool {
+        self.n_mm.abs() <= tolerance.n_mm && self.alpha_rad.abs() <= tolerance.alpha_rad
+    }
+}
+
+/// A planar isometry of the pad's x–y plane as a rigid transform about z.
+pub fn planar_to_spatial(planar: &Isometry2<f64>) -> Isometry3<f64> {
+    let t = planar.translation.vector;
+    Isometry3::from_parts(
+        Translation3::new(t.x, t.y, 0.0),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), planar.rotation.angle()),
+    )
+}
+
+/// The paper's correction T_corr (eq. 7), generalised to a target pose.
+///
+/// Returns `old_sensor_from_new_sensor`: the pose, in the trial grasp's
+/// sensor frame, that the sensor must take so that the cable measured at
+/// `measured` lies at `target` in the new frame. With a zero target it is
+/// eq. 7 exactly, but for the translation: eq. 7 moves to the intercept
+/// (0, n); this moves to the foot of the perpendicular, which differs by a
+/// slide along the cable and stays finite for a cable along y.
+pub fn t_corr(measured: &LineInSensor, target: &LineInSensor) -> Isometry3<f64> {
+    let old_from_new = measured.sensor_from_line() * target.sensor_from_line().inverse();
+    planar_to_spatial(&old_from_new)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn new_normalises_angle_and_flips_offset() {
+        let line = LineInSensor::new(PI - 0.1, 2.0);
+        assert_relative_eq!(line.alpha_rad, -0.1, epsilon = 1e-12);
+        assert_relative_eq!(line.offset_mm, -2.0, epsilon = 1e-12);
+        let vertical = LineInSensor::new(-FRAC_PI_2, 1.0);
+        assert_relative_eq!(vertical.alpha_rad, FRAC_PI_2, epsilon = 1e-12);
+        assert_relative_eq!(vertical.offset_mm, -1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn slope_intercept_matches_paper_form_and_refuses_vertical() {
+        let m: f64 = 0.3;
+        let n = 1.5;
+        let line = LineInSensor::through(Vector2::new(0.0, n), Vector2::new(1.0, m));
+        let (m_fit, n_fit) = line.slope_intercept().unwrap();
+        assert_relative_eq!(m_fit, m, epsilon = 1e-12);
+        assert_relative_eq!(n_fit, n, epsilon = 1e-12);
+        assert_relative_eq!(line.offset_mm, n * m.atan().cos(), epsilon = 1e-12);
+        let vertical = LineInSensor::through(Vector2::new(2.0, 0.0), Vector2::new(0.0, 1.0));
+        assert!(vertical.slope_intercept().is_none());
+        assert_relative_eq!(vertical.offset_mm, -2.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn t_corr_with_zero_target_is_eq_7() {
+        let alpha = 0.2_f64;
+        let n = 3.0;
+        let measured = LineInSensor::through(Vector2::new(0.0, n), Vector2::new(alpha.cos(), alpha.sin()));
+        let t = t_corr(&measured, &LineInSensor::new(0.0, 0.0));
+        let (_, _, yaw) = t.rotation.euler_angles();
+        assert_relative_eq!(yaw, alpha, epsilon = 1e-12);
+        // Eq. 7 translates by (0, n); ours lands on the same line, at the foot.
+        let p = t.translation.vector;
+        assert_relative_eq!(measured.distance_mm(Vector2::new(p.x, p.y)), 0.0, epsilon = 1e-12);
+        assert_relative_eq!(p.z, 0.0);
+    }
+
+    #[test]
+    fn t_corr_moves_the_cable_onto_the_target() {
+        let measured = LineInSensor::new(1.4, -2.5);
+        let target = LineInSensor::new(0.1, 0.7);
+        let old_from_new = t_corr(&measured, &target);
+        // Express the measured line in the new frame.
+        let (_, _, yaw) = old_from_new.rotation.euler_angles();
+        let t = old_from_new.translation.vector;
+        let new_from_old = Isometry2::new(Vector2::new(t.x, t.y), yaw).inverse();
+        let seen = measured.transformed(&new_from_old);
+        let err = seen.error_to(&target);
+        assert_relative_eq!(err.n_mm, 0.0, epsilon = 1e-9);
+        assert_relative_eq!(err.alpha_rad, 0.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn error_wraps_angle_across_vertical() {
+        let a = LineInSensor::new(FRAC_PI_2 - 0.01, 0.0);
+        let b = LineInSensor::new(-FRAC_PI_2 + 0.01, 0.0);
+        let err = a.error_to(&b);
+        assert_relative_eq!(err.alpha_rad, -0.02, epsilon = 1e-9);
+    }
+}

@@ -1,0 +1,4 @@
+//! What the cell's sensors tell about the cable: `tactile` turns taxel
+//! voltages into the cable's pose on the pad.
+
+pub mod tactile;
