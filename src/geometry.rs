@@ -35,7 +35,11 @@ impl LineInSensor {
         // the direction, and with it the normal and the offset's sign.
         let k = ((alpha_rad - FRAC_PI_2) / PI).ceil();
         let alpha = alpha_rad - k * PI;
-        let offset = if k.rem_euclid(2.0) == 1.0 { -offset_mm } else { offset_mm };
+        let offset = if k.rem_euclid(2.0) == 1.0 {
+            -offset_mm
+        } else {
+            offset_mm
+        };
         Self {
             alpha_rad: alpha,
             offset_mm: offset,
@@ -88,10 +92,7 @@ impl LineInSensor {
     /// `other_from_sensor` maps sensor coordinates into that frame.
     pub fn transformed(&self, other_from_sensor: &Isometry2<f64>) -> LineInSensor {
         let frame = other_from_sensor * self.sensor_from_line();
-        LineInSensor::through(
-            frame.translation.vector,
-            frame.rotation * Vector2::x(),
-        )
+        LineInSensor::through(frame.translation.vector, frame.rotation * Vector2::x())
     }
 }
 
@@ -164,13 +165,18 @@ mod tests {
     fn t_corr_with_zero_target_is_eq_7() {
         let alpha = 0.2_f64;
         let n = 3.0;
-        let measured = LineInSensor::through(Vector2::new(0.0, n), Vector2::new(alpha.cos(), alpha.sin()));
+        let measured =
+            LineInSensor::through(Vector2::new(0.0, n), Vector2::new(alpha.cos(), alpha.sin()));
         let t = t_corr(&measured, &LineInSensor::new(0.0, 0.0));
         let (_, _, yaw) = t.rotation.euler_angles();
         assert_relative_eq!(yaw, alpha, epsilon = 1e-12);
         // Eq. 7 translates by (0, n); ours lands on the same line, at the foot.
         let p = t.translation.vector;
-        assert_relative_eq!(measured.distance_mm(Vector2::new(p.x, p.y)), 0.0, epsilon = 1e-12);
+        assert_relative_eq!(
+            measured.distance_mm(Vector2::new(p.x, p.y)),
+            0.0,
+            epsilon = 1e-12
+        );
         assert_relative_eq!(p.z, 0.0);
     }
 

@@ -1,5 +1,10 @@
 //! cablecell: a robot task orchestrator for a vision- and tactile-guided
-//! cable-grasping cell. See ARCHITECTURE.md for the map of the parts.
+//! cable-grasping cell. ARCHITECTURE.md maps the parts.
 
+pub mod cell;
 pub mod geometry;
+pub mod hw;
+pub mod orchestrator;
 pub mod perception;
+pub mod sim;
+pub mod task;

@@ -1,1 +1,80 @@
-fn main() {}
+//! The `cablecell` command line.
+
+mod cli;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Robot task orchestrator for a vision- and tactile-guided cable-grasping
+/// cell.
+///
+/// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
+/// the allowed regrasps, no cable on the pad); 2 bad input (command line,
+/// task, cell or map file); 3 device fault (the cell was made safe).
+#[derive(Parser)]
+#[command(version, about, long_about)]
+struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a task on a cell, printing each state transition and the cable's
+    /// pose on the pad after each grasp.
+    Run {
+        /// The task file, e.g. tasks/regrasp.toml.
+        task: PathBuf,
+        /// The cell file.
+        #[arg(long, default_value = "config/cell.sim.toml")]
+        cell: PathBuf,
+        /// Seed of the simulated cell (default: the task file's, else random).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Print one JSON report instead of the running commentary.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Validate task and cell files without running them.
+    Check {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+    /// Fit the cable on one 5×5 Δv map (25 numbers, row-major c11..c55, as a
+    /// JSON array or separated by white space or commas) and print the
+    /// direction, centroids and linear and quadratic fits as JSON.
+    TactileFit {
+        /// The map file; standard input if absent or `-`.
+        file: Option<PathBuf>,
+        /// Taxel pitch.
+        #[arg(long, default_value_t = 3.55)]
+        pitch_mm: f64,
+        /// Peak Δv below which the pad touches nothing.
+        #[arg(long, default_value_t = 0.05)]
+        contact_threshold_v: f64,
+    },
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+        .with_writer(std::io::stderr)
+        .init();
+    let status = match Args::parse().command {
+        Command::Run {
+            task,
+            cell,
+            seed,
+            json,
+        } => cli::run::run(&task, &cell, seed, json),
+        Command::Check { files } => cli::check::check(&files),
+        Command::TactileFit {
+            file,
+            pitch_mm,
+            contact_threshold_v,
+        } => cli::tactile_fit::tactile_fit(file.as_deref(), pitch_mm, contact_threshold_v),
+    };
+    status.into()
+}

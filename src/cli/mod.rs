@@ -1,0 +1,23 @@
+//! The subcommands, each in its own file; `Status` is the exit status
+//! they share.
+
+pub mod check;
+pub mod run;
+pub mod tactile_fit;
+
+use std::process::ExitCode;
+
+/// The documented exit statuses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    Success = 0,
+    TaskFailed = 1,
+    BadInput = 2,
+    DeviceFault = 3,
+}
+
+impl From<Status> for ExitCode {
+    fn from(status: Status) -> Self {
+        ExitCode::from(status as u8)
+    }
+}

@@ -1,0 +1,24 @@
+//! The cell's time. Simulated cells advance it by the durations their
+//! devices would take, so a run is deterministic and takes no wall time.
+
+pub trait Clock: Send {
+    /// Seconds since the cell started.
+    fn now_s(&self) -> f64;
+}
+
+/// The simulated world's clock, advanced by the simulated devices.
+pub struct SimClock {
+    world: crate::sim::world::SharedWorld,
+}
+
+impl SimClock {
+    pub fn new(world: crate::sim::world::SharedWorld) -> Self {
+        Self { world }
+    }
+}
+
+impl Clock for SimClock {
+    fn now_s(&self) -> f64 {
+        crate::sim::world::lock(&self.world).now_s
+    }
+}

@@ -1,0 +1,48 @@
+//! The oracle detector: the simulated cable's true grasp frame, disturbed
+//! in the image plane as a vision pipeline would be. It stands in for the
+//! vision pipeline until that exists, and is named for what it is.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use super::{CableDetection, CableDetector};
+use crate::hw::DeviceError;
+use crate::sim::world::{SharedWorld, lock};
+
+pub struct OracleDetector {
+    world: SharedWorld,
+    position_noise_mm: f64,
+    angle_noise_rad: f64,
+    rng: ChaCha8Rng,
+}
+
+impl OracleDetector {
+    pub fn new(
+        world: SharedWorld,
+        position_noise_mm: f64,
+        angle_noise_rad: f64,
+        rng: ChaCha8Rng,
+    ) -> Self {
+        Self {
+            world,
+            position_noise_mm,
+            angle_noise_rad,
+            rng,
+        }
+    }
+}
+
+impl CableDetector for OracleDetector {
+    fn detect(&mut self) -> Result<Vec<CableDetection>, DeviceError> {
+        let across_mm = self.position_noise_mm * self.rng.sample::<f64, _>(StandardNormal);
+        let turn_rad = self.angle_noise_rad * self.rng.sample::<f64, _>(StandardNormal);
+        let cable_from_detected = Isometry3::from_parts(
+            Translation3::new(0.0, across_mm, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn_rad),
+        );
+        let base_from_cable = lock(&self.world).base_from_cable * cable_from_detected;
+        Ok(vec![CableDetection { base_from_cable }])
+    }
+}

@@ -1,0 +1,56 @@
+//! The cell's devices: one trait per kind, each with its simulated
+//! implementation beside it (`arm/sim.rs`, ...). Real drivers go beside
+//! them and implement the same traits.
+
+pub mod arm;
+pub mod clock;
+pub mod detector;
+pub mod gripper;
+pub mod tactile;
+
+use serde::Serialize;
+
+/// Which device of the cell, as named in errors and records.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeviceKind {
+    Arm,
+    Gripper,
+    Tactile,
+    Detector,
+}
+
+impl std::fmt::Display for DeviceKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            DeviceKind::Arm => "arm",
+            DeviceKind::Gripper => "gripper",
+            DeviceKind::Tactile => "tactile sensor",
+            DeviceKind::Detector => "detector",
+        })
+    }
+}
+
+/// A device failed to do what it was asked.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DeviceError {
+    /// The device did not answer in time: check its cable, power and port.
+    #[error("{device}: no answer within {waited_ms} ms")]
+    Timeout { device: DeviceKind, waited_ms: u64 },
+    /// The device refused the command; `reason` is its own explanation.
+    #[error("{device}: refused {command}: {reason}")]
+    Refused {
+        device: DeviceKind,
+        command: &'static str,
+        reason: String,
+    },
+}
+
+impl DeviceError {
+    pub fn device(&self) -> DeviceKind {
+        match self {
+            DeviceError::Timeout { device, .. } | DeviceError::Refused { device, .. } => *device,
+        }
+    }
+}

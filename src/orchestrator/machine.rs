@@ -1,0 +1,409 @@
+//! The grasp sequence as a hierarchical state machine (statig).
+//!
+//! ```text
+//! idle ─Start─▶ ┌ grasping ─────────────────────────────────────────────┐
+//!               │ prepare ─▶ detect ─▶ approach ─▶ trial_grasp ─▶ evaluate │──▶ done
+//!               │                                   regrasp ◀─┘  ▲  │    │──▶ failed
+//!               │                                      └─▶ verify ┘──┘    │
+//!               └───── DeviceFault, Abort ──────────────────────────▶ fault
+//! ```
+//!
+//! The machine does no I/O. A state's entry action leaves a `Command` in
+//! the context; the runner has the cell carry it out and feeds back the
+//! answering `Event`. The `grasping` superstate owns what every step
+//! shares: a device fault or an abort leads to `fault`, whose command makes
+//! the cell safe. Every transition is logged once, by `after_transition`,
+//! into the run record.
+
+use nalgebra::{Isometry3, Translation3};
+use statig::prelude::*;
+
+use super::command::{Command, Event};
+use super::plan::Plan;
+use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord};
+use crate::geometry::{planar_to_spatial, t_corr};
+use crate::hw::gripper::GripOutcome;
+use crate::hw::tactile::TactileFrame;
+use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame, fit_wire};
+
+/// What the machine shares with the runner.
+#[derive(Debug)]
+pub struct Context {
+    /// The cell's clock when the event being handled arrived.
+    pub now_s: f64,
+    /// What the cell must do next, left by the latest entry action.
+    pub command: Option<Command>,
+    pub record: RunRecord,
+}
+
+impl Context {
+    pub fn new(record: RunRecord) -> Self {
+        Self {
+            now_s: 0.0,
+            command: None,
+            record,
+        }
+    }
+}
+
+/// The machine's own storage: the plan and what it learnt on the way.
+pub struct GraspTask {
+    plan: Plan,
+    /// Per-taxel rest voltages, measured in `prepare`.
+    bias: Option<Bias>,
+    /// Where the next grasp puts the TCP.
+    base_from_tcp_aim: Isometry3<f64>,
+    /// The arm's measured pose at the latest grasp.
+    base_from_tcp_grasped: Isometry3<f64>,
+    regrasps_done: u32,
+}
+
+impl GraspTask {
+    pub fn new(plan: Plan) -> Self {
+        Self {
+            plan,
+            bias: None,
+            base_from_tcp_aim: Isometry3::identity(),
+            base_from_tcp_grasped: Isometry3::identity(),
+            regrasps_done: 0,
+        }
+    }
+}
+
+#[state_machine(
+    initial = "State::idle()",
+    state(derive(Debug, Clone, PartialEq, Eq)),
+    superstate(derive(Debug)),
+    after_transition = "Self::after_transition"
+)]
+impl GraspTask {
+    /// Start → prepare.
+    #[state]
+    fn idle(event: &Event) -> Outcome<State> {
+        match event {
+            Event::Start => Transition(State::prepare()),
+            _ => Handled,
+        }
+    }
+
+    /// Tactile (bias frames) → detect; too few frames → fault.
+    #[state(superstate = "grasping", entry_action = "enter_prepare")]
+    fn prepare(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Tactile(frames) => {
+                let mut estimator = BiasEstimator::new(self.plan.bias_frames);
+                match frames.iter().find_map(|frame| estimator.push(&frame.raw)) {
+                    Some(bias) => {
+                        self.bias = Some(bias);
+                        Transition(State::detect())
+                    }
+                    None => fault(
+                        context,
+                        None,
+                        format!(
+                            "{} bias frames read, {} needed",
+                            frames.len(),
+                            self.plan.bias_frames
+                        ),
+                    ),
+                }
+            }
+            _ => Super,
+        }
+    }
+
+    /// Detected (a cable) → approach; Detected (none) → failed.
+    #[state(superstate = "grasping", entry_action = "enter_detect")]
+    fn detect(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Detected(detections) => match detections.first() {
+                Some(detection) => {
+                    // Aim so that the cable lands on the target pose.
+                    let sensor_from_cable = planar_to_spatial(&self.plan.target.sensor_from_line());
+                    self.base_from_tcp_aim = detection.base_from_cable
+                        * sensor_from_cable.inverse()
+                        * self.plan.tcp_from_sensor.inverse();
+                    Transition(State::approach())
+                }
+                None => fail(context, Failure::NothingDetected),
+            },
+            _ => Super,
+        }
+    }
+
+    /// Arrived (at the standoff) → trial_grasp.
+    #[state(superstate = "grasping", entry_action = "enter_approach")]
+    fn approach(event: &Event) -> Outcome<State> {
+        match event {
+            Event::Arrived => Transition(State::trial_grasp()),
+            _ => Super,
+        }
+    }
+
+    /// Grasped (holding) → evaluate; Grasped (empty) → failed.
+    #[state(superstate = "grasping", entry_action = "enter_trial_grasp")]
+    fn trial_grasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Grasped {
+                base_from_tcp,
+                grip,
+            } => self.on_grasped(context, base_from_tcp, grip, State::evaluate()),
+            _ => Super,
+        }
+    }
+
+    /// Tactile → done (within tolerance), regrasp, or failed.
+    #[state(superstate = "grasping", entry_action = "enter_read_tactile")]
+    fn evaluate(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Tactile(frames) => self.judge(context, frames),
+            _ => Super,
+        }
+    }
+
+    /// Grasped (holding) → verify; Grasped (empty) → failed.
+    #[state(superstate = "grasping", entry_action = "enter_regrasp")]
+    fn regrasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Grasped {
+                base_from_tcp,
+                grip,
+            } => self.on_grasped(context, base_from_tcp, grip, State::verify()),
+            _ => Super,
+        }
+    }
+
+    /// Tactile → done (within tolerance), regrasp, or failed.
+    #[state(superstate = "grasping", entry_action = "enter_read_tactile")]
+    fn verify(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::Tactile(frames) => self.judge(context, frames),
+            _ => Super,
+        }
+    }
+
+    /// DeviceFault, Abort → fault, for every step of the sequence.
+    #[superstate]
+    fn grasping(context: &mut Context, event: &Event) -> Outcome<State> {
+        match event {
+            Event::DeviceFault(error) => fault(context, Some(error.device()), error.to_string()),
+            Event::Abort => fault(context, None, "aborted by the operator".into()),
+            _ => Handled,
+        }
+    }
+
+    /// The cable is held at the target pose.
+    #[state]
+    fn done(event: &Event) -> Outcome<State> {
+        let _ = event;
+        Handled
+    }
+
+    /// The task did not reach its goal; the cell is fine.
+    #[state]
+    fn failed(event: &Event) -> Outcome<State> {
+        let _ = event;
+        Handled
+    }
+
+    /// Stopped → stays: the cell is safe, the run is over.
+    #[state(entry_action = "enter_fault")]
+    fn fault(context: &mut Context, event: &Event) -> Outcome<State> {
+        if let Event::Stopped { problems } = event {
+            context.record.safe_stop_problems = problems.iter().map(ToString::to_string).collect();
+        }
+        Handled
+    }
+
+    #[action]
+    fn enter_prepare(&mut self, context: &mut Context) {
+        context.command = Some(Command::Prepare {
+            open_mm: self.plan.open_mm,
+            bias_frames: self.plan.bias_frames,
+        });
+    }
+
+    #[action]
+    fn enter_detect(context: &mut Context) {
+        context.command = Some(Command::Detect);
+    }
+
+    #[action]
+    fn enter_approach(&mut self, context: &mut Context) {
+        context.command = Some(Command::MoveTo {
+            base_from_tcp: self.standoff_from(&self.base_from_tcp_aim),
+            speed_mm_s: self.plan.speed_mm_s,
+        });
+    }
+
+    #[action]
+    fn enter_trial_grasp(&mut self, context: &mut Context) {
+        context.command = Some(Command::Grasp {
+            base_from_tcp: self.base_from_tcp_aim,
+            speed_mm_s: self.plan.speed_mm_s,
+            grip_current_a: self.plan.grip_current_a,
+        });
+    }
+
+    #[action]
+    fn enter_read_tactile(&mut self, context: &mut Context) {
+        context.command = Some(Command::ReadTactile {
+            frames: self.plan.average_frames,
+        });
+    }
+
+    #[action]
+    fn enter_regrasp(&mut self, context: &mut Context) {
+        self.regrasps_done += 1;
+        context.command = Some(Command::Regrasp {
+            base_from_tcp: self.base_from_tcp_aim,
+            speed_mm_s: self.plan.speed_mm_s,
+            open_mm: self.plan.open_mm,
+            retreat_mm: self.plan.retreat_mm,
+            grip_current_a: self.plan.grip_current_a,
+        });
+    }
+
+    #[action]
+    fn enter_fault(&mut self, context: &mut Context) {
+        context.command = Some(Command::SafeStop {
+            open_mm: self.plan.open_mm,
+        });
+    }
+}
+
+impl GraspTask {
+    /// The pose `standoff_mm` back from `base_from_tcp` along the approach
+    /// axis (the TCP's z).
+    fn standoff_from(&self, base_from_tcp: &Isometry3<f64>) -> Isometry3<f64> {
+        base_from_tcp * Translation3::new(0.0, 0.0, -self.plan.standoff_mm)
+    }
+
+    fn on_grasped(
+        &mut self,
+        context: &mut Context,
+        base_from_tcp: &Isometry3<f64>,
+        grip: &GripOutcome,
+        next: State,
+    ) -> Outcome<State> {
+        match grip {
+            GripOutcome::Holding { .. } => {
+                self.base_from_tcp_grasped = *base_from_tcp;
+                Transition(next)
+            }
+            GripOutcome::Empty => fail(
+                context,
+                Failure::GraspedNothing {
+                    attempt: self.regrasps_done,
+                },
+            ),
+        }
+    }
+
+    /// Estimates the cable's pose from the frames, records the grasp, and
+    /// decides: done, regrasp (aiming with T_corr) or failed.
+    fn judge(&mut self, context: &mut Context, frames: &[TactileFrame]) -> Outcome<State> {
+        let attempt = self.regrasps_done;
+        let raw: Vec<RawFrame> = frames.iter().map(|frame| frame.raw).collect();
+        let Some(map) = self.bias.as_ref().and_then(|bias| bias.remove_mean(&raw)) else {
+            return fault(context, None, "no tactile frames to evaluate".into());
+        };
+        let fit = fit_wire(&map, &self.plan.fit);
+        let estimated_error = fit
+            .as_ref()
+            .ok()
+            .map(|fit| fit.line.error_to(&self.plan.target));
+        context.record.grasps.push(GraspRecord {
+            attempt,
+            t_s: context.now_s,
+            base_from_tcp: self.base_from_tcp_grasped,
+            map,
+            fit: fit.as_ref().ok().cloned(),
+            estimated_error,
+            truth: None,
+        });
+        let fit = match fit {
+            Ok(fit) => fit,
+            Err(FitError::NoContact { peak_dv_v, .. }) => {
+                return fail(context, Failure::NoContact { attempt, peak_dv_v });
+            }
+            Err(error) => {
+                let error = error.to_string();
+                return fail(context, Failure::FitFailed { attempt, error });
+            }
+        };
+        let error = fit.line.error_to(&self.plan.target);
+        if error.within(&self.plan.tolerance) {
+            context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
+            Transition(State::done())
+        } else if attempt < self.plan.max_regrasps {
+            let sensor_old_from_new = t_corr(&fit.line, &self.plan.target);
+            self.base_from_tcp_aim = self.base_from_tcp_grasped
+                * self.plan.tcp_from_sensor
+                * sensor_old_from_new
+                * self.plan.tcp_from_sensor.inverse();
+            Transition(State::regrasp())
+        } else {
+            fail(
+                context,
+                Failure::ToleranceNotReached {
+                    regrasps: attempt,
+                    error,
+                },
+            )
+        }
+    }
+
+    fn after_transition(&mut self, source: &State, target: &State, context: &mut Context) {
+        context.record.transitions.push(TransitionRecord {
+            from: source.name(),
+            to: target.name(),
+            t_s: context.now_s,
+        });
+    }
+}
+
+impl State {
+    /// The state's name as records and reports spell it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            State::Idle { .. } => "idle",
+            State::Prepare { .. } => "prepare",
+            State::Detect { .. } => "detect",
+            State::Approach { .. } => "approach",
+            State::TrialGrasp { .. } => "trial_grasp",
+            State::Evaluate { .. } => "evaluate",
+            State::Regrasp { .. } => "regrasp",
+            State::Verify { .. } => "verify",
+            State::Done { .. } => "done",
+            State::Failed { .. } => "failed",
+            State::Fault { .. } => "fault",
+        }
+    }
+
+    /// Whether the run is over in this state.
+    pub fn is_final(&self) -> bool {
+        matches!(
+            self,
+            State::Done { .. } | State::Failed { .. } | State::Fault { .. }
+        )
+    }
+}
+
+fn fail(context: &mut Context, reason: Failure) -> Outcome<State> {
+    context.record.outcome = Some(RunOutcome::Failed { reason });
+    Transition(State::failed())
+}
+
+fn fault(
+    context: &mut Context,
+    device: Option<crate::hw::DeviceKind>,
+    error: String,
+) -> Outcome<State> {
+    context.record.outcome = Some(RunOutcome::Fault {
+        state: context.record.current_state(),
+        device,
+        error,
+    });
+    Transition(State::fault())
+}

@@ -1,0 +1,181 @@
+//! The run record: everything a run did, kept as it happens so that a run
+//! that ends in a fault still has all it recorded up to the fault.
+
+use nalgebra::Isometry3;
+use serde::Serialize;
+
+use crate::geometry::{LineInSensor, PoseError};
+use crate::hw::DeviceKind;
+use crate::perception::tactile::{TactileMap, WireFit};
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RunRecord {
+    pub task: String,
+    pub cell: String,
+    pub seed: u64,
+    pub target: LineInSensor,
+    pub tolerance: PoseError,
+    /// Every state change, logged by the machine's transition hook.
+    pub transitions: Vec<TransitionRecord>,
+    /// The trial grasp, then each regrasp.
+    pub grasps: Vec<GraspRecord>,
+    /// How the run ended; `None` while it runs.
+    pub outcome: Option<RunOutcome>,
+    /// Devices that could not be made safe after a fault.
+    pub safe_stop_problems: Vec<String>,
+}
+
+impl RunRecord {
+    pub fn new(
+        task: &str,
+        cell: &str,
+        seed: u64,
+        target: LineInSensor,
+        tolerance: PoseError,
+    ) -> Self {
+        Self {
+            task: task.to_owned(),
+            cell: cell.to_owned(),
+            seed,
+            target,
+            tolerance,
+            transitions: Vec::new(),
+            grasps: Vec::new(),
+            outcome: None,
+            safe_stop_problems: Vec::new(),
+        }
+    }
+
+    /// The state the machine is in, as recorded.
+    pub fn current_state(&self) -> &'static str {
+        self.transitions.last().map_or("idle", |t| t.to)
+    }
+
+    /// How long each visited state lasted; the last one is still open.
+    pub fn state_timings(&self) -> Vec<StateTiming> {
+        self.transitions
+            .iter()
+            .enumerate()
+            .map(|(i, entered)| StateTiming {
+                state: entered.to,
+                entered_s: entered.t_s,
+                duration_s: self
+                    .transitions
+                    .get(i + 1)
+                    .map(|left| left.t_s - entered.t_s),
+            })
+            .collect()
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct TransitionRecord {
+    pub from: &'static str,
+    pub to: &'static str,
+    /// On the cell's clock.
+    pub t_s: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct StateTiming {
+    pub state: &'static str,
+    pub entered_s: f64,
+    pub duration_s: Option<f64>,
+}
+
+/// One grasp and what the pad said of it.
+#[derive(Debug, Clone, Serialize)]
+pub struct GraspRecord {
+    /// 0 for the trial grasp, k for the k-th regrasp.
+    pub attempt: u32,
+    pub t_s: f64,
+    /// The arm's measured pose with the jaws closed.
+    pub base_from_tcp: Isometry3<f64>,
+    /// Mean Δv over the evaluated frames.
+    pub map: TactileMap,
+    /// The cable as the pad estimates it; `None` if the fit failed.
+    pub fit: Option<WireFit>,
+    /// The estimate against the target.
+    pub estimated_error: Option<PoseError>,
+    /// Where the cable really lay, when the cell knows (a simulation).
+    pub truth: Option<Truth>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Truth {
+    pub line: LineInSensor,
+    /// The true pose against the target: the error the grasp really has.
+    pub error: PoseError,
+    /// The estimate against the true pose: the estimator's own error.
+    pub estimate_error: Option<PoseError>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RunOutcome {
+    /// The cable lies within tolerance of the target.
+    Success { regrasps: u32 },
+    /// The task could not reach its goal; the cell is fine.
+    Failed { reason: Failure },
+    /// A device failed or the operator aborted; the cell was made safe.
+    Fault {
+        state: &'static str,
+        device: Option<DeviceKind>,
+        error: String,
+    },
+}
+
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum Failure {
+    /// The detector found no cable.
+    NothingDetected,
+    /// The jaws closed on nothing.
+    GraspedNothing { attempt: u32 },
+    /// The pad feels no cable after a grasp.
+    NoContact { attempt: u32, peak_dv_v: f64 },
+    /// The pad's map could not be fitted.
+    FitFailed { attempt: u32, error: String },
+    /// Still out of tolerance after every allowed regrasp.
+    ToleranceNotReached { regrasps: u32, error: PoseError },
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Failure::NothingDetected => write!(f, "no cable detected"),
+            Failure::GraspedNothing { attempt } => {
+                write!(f, "grasp {attempt}: the jaws closed on nothing")
+            }
+            Failure::NoContact { attempt, peak_dv_v } => write!(
+                f,
+                "grasp {attempt}: no cable on the pad (peak Δv {peak_dv_v:.3} V)"
+            ),
+            Failure::FitFailed { attempt, error } => {
+                write!(f, "grasp {attempt}: tactile fit failed: {error}")
+            }
+            Failure::ToleranceNotReached { regrasps, error } => write!(
+                f,
+                "out of tolerance after {regrasps} regrasp(s): n {:+.3} mm, α {:+.4} rad",
+                error.n_mm, error.alpha_rad
+            ),
+        }
+    }
+}
+
+/// The record with the per-state timings, as `--json` prints it.
+#[derive(Debug, Serialize)]
+pub struct RunReport<'a> {
+    #[serde(flatten)]
+    pub record: &'a RunRecord,
+    pub states: Vec<StateTiming>,
+}
+
+impl<'a> RunReport<'a> {
+    pub fn new(record: &'a RunRecord) -> Self {
+        Self {
+            record,
+            states: record.state_timings(),
+        }
+    }
+}

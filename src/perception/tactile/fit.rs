@@ -1,0 +1,444 @@
+//! The wire parameters (paper, Section III.2): direction test, centroids
+//! (eq. 5 / 6), linear fit (eq. 2) and quadratic fit (eq. 3 / 4).
+//!
+//! Where the paper is explicit this follows it; beyond it:
+//! - Negative Δv are clamped to 0 before everything else. A taxel reading
+//!   below its offset carries no contact, and a negative weight in eq. 5/6
+//!   could push a centroid outside the pad (the denominator can even
+//!   vanish). They are counted in [`WireFit::negative_taxels`].
+//! - Non-finite Δv (only possible in a map built by hand) are treated as 0
+//!   and counted in [`WireFit::non_finite_taxels`], so the fit never turns
+//!   into NaN.
+//! - The one deliberate deviation from eq. 5/6: a column (row) whose
+//!   clamped sum is below `contact_threshold_v` gets no centroid. Such a
+//!   line of taxels holds only noise, and its centroid would be a random
+//!   point that drags both fits; with a zero sum it would be 0/0.
+//! - The linear fit is kept as a [`LineInSensor`] (angle and offset), since
+//!   the paper's `y = m x + n` cannot hold a cable along y. For a vertical
+//!   cable it regresses x on y, the well-posed direction.
+//! - Saturated taxels keep their value, a lower bound of the true Δv: they
+//!   weigh too little, which pulls the centroids slightly away from the
+//!   hardest-pressed spot. They are counted so that the caller can tell
+//!   the gripper squeezes too hard.
+//!
+//! All arithmetic runs on weights divided by the peak and on coordinates in
+//! pitches, so that neither huge nor tiny voltages or pitches overflow or
+//! underflow; the scale is put back at the end.
+
+use std::fmt;
+
+use nalgebra::{SMatrix, SVector, Vector2};
+use serde::{Deserialize, Serialize};
+
+use super::map::{TAXEL_COLS, TAXEL_ROWS, TactileMap};
+use crate::geometry::LineInSensor;
+
+/// The paper's taxel pitch.
+pub const PAPER_PITCH_MM: f64 = 3.55;
+
+/// Which way the cable mainly runs across the pad.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    /// Along x: one centroid per column, eq. 5, and `y = a x² + b x + c`.
+    Horizontal,
+    /// Along y: one centroid per row, eq. 6, and `x = a y² + b y + c`.
+    Vertical,
+}
+
+impl fmt::Display for Direction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Direction::Horizontal => "horizontal",
+            Direction::Vertical => "vertical",
+        })
+    }
+}
+
+/// The pad's geometry and when a taxel counts as touched.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FitConfig {
+    /// Distance between neighbouring taxel centres.
+    pub pitch_mm: f64,
+    /// Below this peak Δv there is no contact; a column (row) whose Δv sum
+    /// is below it gets no centroid.
+    pub contact_threshold_v: f64,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        Self {
+            pitch_mm: PAPER_PITCH_MM,
+            contact_threshold_v: 0.05,
+        }
+    }
+}
+
+/// Smallest and largest pitch accepted: outside, it is a unit mistake.
+const PITCH_RANGE_MM: (f64, f64) = (1e-6, 1e6);
+
+/// One centroid of eq. 5 (a column's) or eq. 6 (a row's).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Centroid {
+    pub x_mm: f64,
+    pub y_mm: f64,
+    /// The clamped Δv sum of its column (row): how much it is worth.
+    pub weight_v: f64,
+}
+
+/// `y = a x² + b x + c` for a horizontal cable (eq. 3), `x = a y² + b y + c`
+/// for a vertical one (eq. 4); lengths in mm, so `a` is in 1/mm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Quadratic {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+}
+
+/// Everything the wire-parameter step found in one tactile map.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct WireFit {
+    pub direction: Direction,
+    /// The paper's h: the smallest column sum of (clamped) Δv.
+    pub h_v: f64,
+    /// The paper's v: the smallest row sum of (clamped) Δv.
+    pub v_v: f64,
+    pub centroids: Vec<Centroid>,
+    /// Least-squares line through the centroids (eq. 2).
+    pub line: LineInSensor,
+    /// The paper's m of eq. 2; `None` for a cable along y.
+    pub slope_m: Option<f64>,
+    /// The paper's n of eq. 2; `None` for a cable along y.
+    pub intercept_n_mm: Option<f64>,
+    /// `None` with fewer than 3 centroids.
+    pub quadratic: Option<Quadratic>,
+    /// The largest clamped Δv.
+    pub peak_dv_v: f64,
+    /// Taxels below their offset, clamped to 0.
+    pub negative_taxels: usize,
+    /// Taxels at the ADC's full scale, their Δv a lower bound.
+    pub saturated_taxels: usize,
+    /// NaN or infinite Δv, treated as 0 (a map built by hand).
+    pub non_finite_taxels: usize,
+}
+
+/// Why no wire parameters came out of a map.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FitError {
+    /// Nothing presses on the pad: the grasp missed the cable, or the
+    /// threshold is above the signal (check the bias was taken with the
+    /// pad free).
+    #[error("no contact: peak Δv {peak_dv_v} V is below the threshold {threshold_v} V")]
+    NoContact { peak_dv_v: f64, threshold_v: f64 },
+    /// The cable touches fewer than two columns (rows): a single spot, such
+    /// as a cable end or a knot, gives no direction to fit.
+    #[error("only {found} {direction} centroid(s) above the threshold, a line needs 2")]
+    TooFewCentroids { found: usize, direction: Direction },
+    /// The configuration is not physical: the pitch must lie within
+    /// 1e-6..=1e6 mm, the threshold must be finite and not negative.
+    #[error(
+        "invalid fit configuration: pitch {pitch_mm} mm, contact threshold {contact_threshold_v} V"
+    )]
+    InvalidConfig {
+        pitch_mm: f64,
+        contact_threshold_v: f64,
+    },
+}
+
+/// The clamped weights of a map, divided by their peak.
+struct Weights {
+    /// In [0, 1], the peak taxel at exactly 1.
+    w: [[f64; TAXEL_COLS]; TAXEL_ROWS],
+    peak_v: f64,
+    negative: usize,
+    non_finite: usize,
+    saturated: usize,
+}
+
+impl Weights {
+    fn of(map: &TactileMap) -> Self {
+        let mut w = [[0.0; TAXEL_COLS]; TAXEL_ROWS];
+        let (mut negative, mut non_finite) = (0, 0);
+        let mut peak_v: f64 = 0.0;
+        for (w, &dv) in w.iter_mut().flatten().zip(map.dv_v.iter().flatten()) {
+            if !dv.is_finite() {
+                non_finite += 1;
+            } else if dv < 0.0 {
+                negative += 1;
+            } else {
+                *w = dv;
+                peak_v = peak_v.max(dv);
+            }
+        }
+        if peak_v > 0.0 {
+            // Dividing by the (finite, positive) peak never overflows, and
+            // keeps the sums below 5 whatever the voltages.
+            for w in w.iter_mut().flatten() {
+                *w /= peak_v;
+            }
+        }
+        let saturated = map.saturated.iter().flatten().filter(|&&s| s).count();
+        Self {
+            w,
+            peak_v,
+            negative,
+            non_finite,
+            saturated,
+        }
+    }
+
+    /// A normalised sum back in volts; saturates at `f64::MAX`, reachable
+    /// only for a hand-built map with Δv above 3.6e307 V.
+    fn volts(&self, normalised: f64) -> f64 {
+        (normalised * self.peak_v).min(f64::MAX)
+    }
+}
+
+/// Centroids as (grid coordinate, centroid coordinate) in pitches: for a
+/// horizontal cable (x_j, y_j^c), for a vertical one (y_i, x_i^c).
+struct Samples {
+    u: [f64; 5],
+    t: [f64; 5],
+    len: usize,
+}
+
+/// The wire parameters of one tactile map.
+pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitError> {
+    let FitConfig {
+        pitch_mm,
+        contact_threshold_v,
+    } = *config;
+    let pitch_ok = (PITCH_RANGE_MM.0..=PITCH_RANGE_MM.1).contains(&pitch_mm);
+    let threshold_ok = contact_threshold_v.is_finite() && contact_threshold_v >= 0.0;
+    if !pitch_ok || !threshold_ok {
+        return Err(FitError::InvalidConfig {
+            pitch_mm,
+            contact_threshold_v,
+        });
+    }
+
+    let weights = Weights::of(map);
+    let peak_v = weights.peak_v;
+    // `!(peak > 0)` also catches a zero threshold on an all-zero map.
+    if !(peak_v > 0.0) || peak_v < contact_threshold_v {
+        return Err(FitError::NoContact {
+            peak_dv_v: peak_v,
+            threshold_v: contact_threshold_v,
+        });
+    }
+    let w = &weights.w;
+    // At most 1, as the peak passed the threshold.
+    let threshold = contact_threshold_v / peak_v;
+
+    let mut col_sums = [0.0; TAXEL_COLS];
+    let mut row_sums = [0.0; TAXEL_ROWS];
+    for (row, values) in w.iter().enumerate() {
+        for (col, &value) in values.iter().enumerate() {
+            col_sums[col] += value;
+            row_sums[row] += value;
+        }
+    }
+    let h = col_sums.iter().copied().fold(f64::INFINITY, f64::min);
+    let v = row_sums.iter().copied().fold(f64::INFINITY, f64::min);
+    // The paper leaves h = v open (a single spot, a cable at exactly 45°):
+    // it goes to Vertical.
+    let direction = if h > v {
+        Direction::Horizontal
+    } else {
+        Direction::Vertical
+    };
+
+    // Grid coordinates in pitches: column j at x = j - 2, row i at y = 2 - i.
+    let mut samples = Samples {
+        u: [0.0; 5],
+        t: [0.0; 5],
+        len: 0,
+    };
+    let mut centroids = Vec::with_capacity(5);
+    for k in 0..5 {
+        let (sum, moment, u) = match direction {
+            Direction::Horizontal => {
+                let moment: f64 = (0..TAXEL_ROWS).map(|i| (2.0 - i as f64) * w[i][k]).sum();
+                (col_sums[k], moment, k as f64 - 2.0)
+            }
+            Direction::Vertical => {
+                let moment: f64 = (0..TAXEL_COLS).map(|j| (j as f64 - 2.0) * w[k][j]).sum();
+                (row_sums[k], moment, 2.0 - k as f64)
+            }
+        };
+        if sum < threshold || sum <= 0.0 {
+            continue;
+        }
+        let t = moment / sum;
+        samples.u[samples.len] = u;
+        samples.t[samples.len] = t;
+        samples.len += 1;
+        let (x, y) = match direction {
+            Direction::Horizontal => (u, t),
+            Direction::Vertical => (t, u),
+        };
+        centroids.push(Centroid {
+            x_mm: x * pitch_mm,
+            y_mm: y * pitch_mm,
+            weight_v: weights.volts(sum),
+        });
+    }
+    if samples.len < 2 {
+        return Err(FitError::TooFewCentroids {
+            found: samples.len,
+            direction,
+        });
+    }
+
+    let line = fit_line(&samples, direction, pitch_mm);
+    let (slope_m, intercept_n_mm) = line.slope_intercept().unzip();
+    Ok(WireFit {
+        direction,
+        h_v: weights.volts(h),
+        v_v: weights.volts(v),
+        centroids,
+        line,
+        slope_m,
+        intercept_n_mm,
+        quadratic: fit_quadratic(&samples, pitch_mm),
+        peak_dv_v: peak_v,
+        negative_taxels: weights.negative,
+        saturated_taxels: weights.saturated,
+        non_finite_taxels: weights.non_finite,
+    })
+}
+
+/// Least squares of t on u (at least 2 distinct u), as a line in mm.
+fn fit_line(samples: &Samples, direction: Direction, pitch_mm: f64) -> LineInSensor {
+    let (u, t) = (&samples.u[..samples.len], &samples.t[..samples.len]);
+    let n = samples.len as f64;
+    let u_mean = u.iter().sum::<f64>() / n;
+    let t_mean = t.iter().sum::<f64>() / n;
+    let (mut s_uu, mut s_ut) = (0.0, 0.0);
+    for (&u, &t) in u.iter().zip(t) {
+        s_uu += (u - u_mean) * (u - u_mean);
+        s_ut += (u - u_mean) * (t - t_mean);
+    }
+    // u are distinct whole pitches, so s_uu >= 1/2.
+    let slope = s_ut / s_uu;
+    let (point, dir) = match direction {
+        Direction::Horizontal => (Vector2::new(u_mean, t_mean), Vector2::new(1.0, slope)),
+        Direction::Vertical => (Vector2::new(t_mean, u_mean), Vector2::new(slope, 1.0)),
+    };
+    LineInSensor::through(point * pitch_mm, dir)
+}
+
+/// Least squares of t = a u² + b u + c (at least 3 distinct u), by QR on
+/// centred coordinates in pitches, converted to mm.
+fn fit_quadratic(samples: &Samples, pitch_mm: f64) -> Option<Quadratic> {
+    if samples.len < 3 {
+        return None;
+    }
+    let n = samples.len as f64;
+    let u_mean = samples.u[..samples.len].iter().sum::<f64>() / n;
+    // Unused rows stay zero: they add nothing to the residual.
+    let mut design = SMatrix::<f64, 5, 3>::zeros();
+    let mut rhs = SVector::<f64, 5>::zeros();
+    for k in 0..samples.len {
+        let s = samples.u[k] - u_mean;
+        design[(k, 0)] = s * s;
+        design[(k, 1)] = s;
+        design[(k, 2)] = 1.0;
+        rhs[k] = samples.t[k];
+    }
+    let qr = design.qr();
+    qr.q_tr_mul(&mut rhs);
+    let coeffs = qr.r().solve_upper_triangular(&rhs.fixed_rows::<3>(0))?;
+    let (a, b, c) = (coeffs[0], coeffs[1], coeffs[2]);
+    // t = a (u - ū)² + b (u - ū) + c in pitches; with u = x/p, t = y/p:
+    // y = (a/p) x² + (b - 2aū) x + p (aū² - bū + c).
+    Some(Quadratic {
+        a: a / pitch_mm,
+        b: b - 2.0 * a * u_mean,
+        c: pitch_mm * (a * u_mean * u_mean - b * u_mean + c),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_6};
+
+    use super::*;
+    use crate::perception::tactile::map::{taxel_x_mm, taxel_y_mm};
+    use approx::assert_relative_eq;
+
+    const PITCH: f64 = PAPER_PITCH_MM;
+    /// The test maps' line spread: a cable of a couple of mm pressed into
+    /// silicone lights up about one neighbour on each side.
+    const SIGMA_MM: f64 = 0.55 * PITCH;
+
+    fn config() -> FitConfig {
+        FitConfig::default()
+    }
+
+    /// Δv = A·exp(-d²/2σ²), d the taxel centre's distance to the cable.
+    fn render(amplitude_v: f64, distance_mm: impl Fn(Vector2<f64>) -> f64) -> TactileMap {
+        TactileMap::from_fn(|row, col| {
+            let p = Vector2::new(taxel_x_mm(col, PITCH), taxel_y_mm(row, PITCH));
+            let d = distance_mm(p);
+            amplitude_v * (-d * d / (2.0 * SIGMA_MM * SIGMA_MM)).exp()
+        })
+    }
+
+    fn render_line(line: LineInSensor, amplitude_v: f64) -> TactileMap {
+        render(amplitude_v, |p| line.distance_mm(p))
+    }
+
+    /// A parabola t = a u² + b u + c, (u, t) = (x, y) if horizontal, else
+    /// (y, x); the distance is found by dense sampling well beyond the pad.
+    fn render_parabola(q: Quadratic, direction: Direction, amplitude_v: f64) -> TactileMap {
+        render(amplitude_v, |p| {
+            let (pu, pt) = match direction {
+                Direction::Horizontal => (p.x, p.y),
+                Direction::Vertical => (p.y, p.x),
+            };
+            (-8000..=8000)
+                .map(|k| {
+                    let u = f64::from(k) * 0.001;
+                    let t = q.a * u * u + q.b * u + q.c;
+                    (u - pu).hypot(t - pt)
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+    }
+
+    fn line_at(alpha_rad: f64, offset_mm: f64) -> LineInSensor {
+        LineInSensor::new(alpha_rad, offset_mm)
+    }
+
+    #[test]
+    fn centred_horizontal_cable_is_the_x_axis() {
+        let fit = fit_wire(&render_line(line_at(0.0, 0.0), 1.0), &config()).unwrap();
+        assert_eq!(fit.direction, Direction::Horizontal);
+        assert!(fit.h_v > fit.v_v);
+        assert_eq!(fit.centroids.len(), 5);
+        for (j, c) in fit.centroids.iter().enumerate() {
+            assert_relative_eq!(c.x_mm, taxel_x_mm(j, PITCH));
+            assert_relative_eq!(c.y_mm, 0.0, epsilon = 1e-12);
+        }
+        assert_relative_eq!(fit.line.alpha_rad, 0.0, epsilon = 1e-12);
+        assert_relative_eq!(fit.line.offset_mm, 0.0, epsilon = 1e-12);
+        assert_relative_eq!(fit.slope_m.unwrap(), 0.0, epsilon = 1e-12);
+        assert_relative_eq!(fit.intercept_n_mm.unwrap(), 0.0, epsilon = 1e-12);
+        let q = fit.quadratic.unwrap();
+        for coeff in [q.a, q.b, q.c] {
+            assert_relative_eq!(coeff, 0.0, epsilon = 1e-12);
+        }
+        assert_relative_eq!(fit.peak_dv_v, 1.0);
+        assert_eq!(
+            (
+                fit.negative_taxels,
+                fit.saturated_taxels,
+                fit.non_finite_taxels
+            ),
+            (0, 0, 0)
+        );
+    }
+}

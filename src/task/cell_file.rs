@@ -1,0 +1,187 @@
+//! The cell file: which backend each device uses, with its limits and
+//! calibration. `config/cell.sim.toml` is the simulated cell.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use serde::Deserialize;
+
+use super::validate::{fraction, non_negative, positive, vector3, voltage_range};
+
+/// A cell file, e.g. `config/cell.sim.toml`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellFile {
+    pub cell: CellSection,
+    pub arm: ArmConfig,
+    pub gripper: GripperConfig,
+    pub tactile: TactileConfig,
+    pub detector: DetectorConfig,
+    /// The simulated scene that the simulated devices share.
+    pub world: WorldConfig,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellSection {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmConfig {
+    /// No Cartesian motion may be faster.
+    #[serde(deserialize_with = "positive")]
+    pub max_speed_mm_s: f64,
+    pub backend: ArmBackend,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum ArmBackend {
+    Sim(SimArmConfig),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimArmConfig {
+    /// Standard deviation of the reached position about the commanded one
+    /// (a Panda's pose repeatability is about 0.1 mm).
+    #[serde(deserialize_with = "non_negative")]
+    pub repeatability_mm: f64,
+    #[serde(deserialize_with = "positive")]
+    pub accel_mm_s2: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GripperConfig {
+    pub backend: GripperBackend,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum GripperBackend {
+    Sim(SimGripperConfig),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimGripperConfig {
+    /// Largest jaw opening (the PG70's stroke is 68 mm).
+    #[serde(deserialize_with = "positive")]
+    pub stroke_mm: f64,
+    #[serde(deserialize_with = "positive")]
+    pub speed_mm_s: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TactileConfig {
+    /// Distance between neighbouring taxel centres (3.55 mm on the paper's pad).
+    #[serde(deserialize_with = "positive")]
+    pub pitch_mm: f64,
+    /// Polling rate of the sensor (500 Hz in the paper).
+    #[serde(deserialize_with = "positive")]
+    pub rate_hz: f64,
+    /// Where the pad sits on the hand: the sensor frame in the TCP frame.
+    pub tcp_from_sensor: FrameConfig,
+    pub backend: TactileBackend,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum TactileBackend {
+    Sim(SimTactileConfig),
+}
+
+/// The first simulated pad: a line-spread response, per-taxel offsets and
+/// gains, a saturating photo-reflector and noise. See `sim::tactile_model`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimTactileConfig {
+    /// Width (σ) of the cap's deformation across the cable, in pitches.
+    #[serde(deserialize_with = "positive")]
+    pub line_spread_pitch: f64,
+    /// Voltage swing of a taxel from rest to full deformation.
+    #[serde(deserialize_with = "positive")]
+    pub span_v: f64,
+    /// Range of the taxels' resting voltages (drawn once per cell).
+    #[serde(deserialize_with = "voltage_range")]
+    pub rest_v: [f64; 2],
+    /// Relative spread of the taxels' gains (drawn once per cell).
+    #[serde(deserialize_with = "fraction")]
+    pub gain_spread: f64,
+    /// Noise standard deviation as a fraction of `span_v`.
+    #[serde(deserialize_with = "fraction")]
+    pub noise_fraction: f64,
+    /// Fault injection: the sensor stops answering after this many frames.
+    #[serde(default)]
+    pub silent_after_frames: Option<u64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DetectorConfig {
+    pub backend: DetectorBackend,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum DetectorBackend {
+    /// Reads the simulated cable's true pose and adds noise: a stand-in
+    /// for the vision pipeline, named as such.
+    Oracle(OracleConfig),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OracleConfig {
+    /// σ of the grasp point's error across the cable, in the pad's plane.
+    #[serde(deserialize_with = "non_negative")]
+    pub position_noise_mm: f64,
+    /// σ of the cable direction's error about the pad's normal.
+    #[serde(deserialize_with = "non_negative")]
+    pub angle_noise_rad: f64,
+}
+
+/// The simulated scene: one straight cable held between two supports.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldConfig {
+    #[serde(deserialize_with = "positive")]
+    pub cable_diameter_mm: f64,
+    /// The cable's midpoint between the supports, in the base frame.
+    #[serde(deserialize_with = "vector3")]
+    pub cable_center_mm: [f64; 3],
+    /// Direction of the cable in the base's horizontal plane.
+    pub cable_yaw_rad: f64,
+    /// Inclination of the cable from horizontal.
+    pub cable_tilt_rad: f64,
+    /// How far across the pad a cable can lie and still end up between the
+    /// closing fingers.
+    #[serde(deserialize_with = "positive")]
+    pub capture_half_height_mm: f64,
+}
+
+/// A rigid transform as written in a cell file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameConfig {
+    #[serde(deserialize_with = "vector3")]
+    pub translation_mm: [f64; 3],
+    /// Roll, pitch, yaw (about x, y, z of the parent, applied in that order).
+    #[serde(deserialize_with = "vector3")]
+    pub rotation_rpy_rad: [f64; 3],
+}
+
+impl FrameConfig {
+    pub fn isometry(&self) -> Isometry3<f64> {
+        let [x, y, z] = self.translation_mm;
+        let [roll, pitch, yaw] = self.rotation_rpy_rad;
+        Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        )
+    }
+}

@@ -1,0 +1,133 @@
+//! Reading TOML files into their schemas, with positions in every error.
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+
+use super::{CellFile, TaskFile};
+
+/// Why a task or cell file could not be used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The file could not be read: check the path and its permissions.
+    #[error("{}: cannot read the file: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not TOML, or a value does not fit the schema: the message
+    /// says what was expected at that place.
+    #[error("{}:{line}:{column}: {field}: {message}", path.display(), field = if field.is_empty() { "(file)" } else { field })]
+    Invalid {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        /// Dotted path of the offending key, e.g. `tolerance.n_mm`.
+        field: String,
+        message: String,
+    },
+    /// The file has neither a `[task]` nor a `[cell]` table, so it is not
+    /// known what to check it against.
+    #[error("{}: not a task or cell file: expected a [task] or [cell] table at the top", path.display())]
+    UnknownKind { path: PathBuf },
+}
+
+/// What `check_file` found a file to be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    Task,
+    Cell,
+}
+
+impl std::fmt::Display for FileKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FileKind::Task => "task file",
+            FileKind::Cell => "cell file",
+        })
+    }
+}
+
+pub fn load_task(path: &Path) -> Result<TaskFile, ConfigError> {
+    parse(path, &read(path)?)
+}
+
+pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
+    parse(path, &read(path)?)
+}
+
+/// Validates a task or cell file, telling which by its top table.
+pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
+    let text = read(path)?;
+    let table: toml::Table = parse(path, &text)?;
+    if table.contains_key("task") {
+        parse::<TaskFile>(path, &text).map(|_| FileKind::Task)
+    } else if table.contains_key("cell") {
+        parse::<CellFile>(path, &text).map(|_| FileKind::Cell)
+    } else {
+        Err(ConfigError::UnknownKind {
+            path: path.to_owned(),
+        })
+    }
+}
+
+fn read(path: &Path) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Deserialises `text`; an error carries the key path (serde_path_to_error)
+/// and the span (toml) turned into a 1-based line and column.
+pub(crate) fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T, ConfigError> {
+    let deserializer = match toml::Deserializer::parse(text) {
+        Ok(d) => d,
+        Err(e) => return Err(invalid(path, text, String::new(), &e)),
+    };
+    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let field = e.path().to_string();
+        invalid(
+            path,
+            text,
+            if field == "." { String::new() } else { field },
+            e.inner(),
+        )
+    })
+}
+
+fn invalid(path: &Path, text: &str, field: String, error: &toml::de::Error) -> ConfigError {
+    let offset = error.span().map_or(0, |span| span.start);
+    let (line, column) = line_column(text, offset);
+    ConfigError::Invalid {
+        path: path.to_owned(),
+        line,
+        column,
+        field,
+        message: error.message().to_owned(),
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_column_counts_from_one() {
+        let text = "a = 1\nbb = 2\n";
+        assert_eq!(line_column(text, 0), (1, 1));
+        assert_eq!(line_column(text, 6), (2, 1));
+        assert_eq!(line_column(text, 11), (2, 6));
+        assert_eq!(line_column(text, 999), (3, 1));
+    }
+}

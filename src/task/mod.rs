@@ -1,0 +1,16 @@
+//! Task and cell files: their schemas, and loading that names the file,
+//! line, column and field of every error.
+//!
+//! A task file says what to do (target pose, tolerance, how many regrasps);
+//! a cell file says with what (which backend each device uses, its limits
+//! and calibration). Each begins with its own table, `[task]` or `[cell]`,
+//! so that `cablecell check` can tell them apart.
+
+pub mod cell_file;
+pub mod load;
+pub mod task_file;
+mod validate;
+
+pub use cell_file::CellFile;
+pub use load::{ConfigError, FileKind, check_file, load_cell, load_task};
+pub use task_file::TaskFile;

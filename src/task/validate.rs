@@ -1,0 +1,96 @@
+//! Range checks run while a file is deserialised, so that a bad value is
+//! reported at its own line and column (`#[serde(deserialize_with = ...)]`).
+
+use serde::{Deserialize, Deserializer, de::Error};
+
+/// A number > 0.
+pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected a number > 0, found {v}"
+        )))
+    }
+}
+
+/// A number ≥ 0.
+pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected a number ≥ 0, found {v}"
+        )))
+    }
+}
+
+/// A finite number.
+pub fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected a finite number, found {v}"
+        )))
+    }
+}
+
+/// An angle in (-π/2, π/2]: a cable's direction on the pad.
+pub fn line_angle<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v > -std::f64::consts::FRAC_PI_2 && v <= std::f64::consts::FRAC_PI_2 {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected an angle in (-π/2, π/2] rad, found {v}"
+        )))
+    }
+}
+
+/// A fraction in [0, 1].
+pub fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected a fraction in [0, 1], found {v}"
+        )))
+    }
+}
+
+/// A count ≥ 1.
+pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    let v = usize::deserialize(d)?;
+    if v >= 1 {
+        Ok(v)
+    } else {
+        Err(D::Error::custom("expected a count ≥ 1, found 0"))
+    }
+}
+
+/// Three finite numbers.
+pub fn vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    let v = <[f64; 3]>::deserialize(d)?;
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(v)
+    } else {
+        Err(D::Error::custom("expected three finite numbers"))
+    }
+}
+
+/// A range of voltages `[low, high]` within the 3.3 V ADC.
+pub fn voltage_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    let [low, high] = <[f64; 2]>::deserialize(d)?;
+    if (0.0..=3.3).contains(&low) && (low..=3.3).contains(&high) {
+        Ok([low, high])
+    } else {
+        Err(D::Error::custom(format!(
+            "expected [low, high] with 0 ≤ low ≤ high ≤ 3.3 V, found [{low}, {high}]"
+        )))
+    }
+}

@@ -1,0 +1,173 @@
+//! Bad task and cell files give errors that name the file, line, column
+//! and field, and exit with status 2.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BAD_INPUT: i32 = 2;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cablecell runs")
+}
+
+/// The shipped regrasp task with `from` replaced by `to`, in a temp file.
+fn edited_task(dir: &tempfile::TempDir, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("tasks/regrasp.toml")).expect("task file");
+    assert!(text.contains(from), "the shipped task holds {from:?}");
+    let path = dir.path().join("task.toml");
+    std::fs::write(&path, text.replacen(from, to, 1)).expect("write");
+    path
+}
+
+/// Runs `check` on the edited task and returns its error output, the
+/// file, and the folder that keeps the file alive.
+fn check_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = edited_task(&dir, from, to);
+    let out = cablecell(&["check", path.to_str().expect("utf-8 path")]);
+    assert_eq!(out.status.code(), Some(BAD_INPUT));
+    // `run` must refuse the same file the same way.
+    let run = cablecell(&["run", path.to_str().expect("utf-8 path"), "--seed", "1"]);
+    assert_eq!(run.status.code(), Some(BAD_INPUT));
+    assert_eq!(run.stderr, out.stderr);
+    (String::from_utf8(out.stderr).expect("utf-8"), path, dir)
+}
+
+/// The line (1-based) of `needle` in the edited file.
+fn line_of(path: &Path, needle: &str) -> usize {
+    let text = std::fs::read_to_string(path).expect("read");
+    text.lines()
+        .position(|l| l.contains(needle))
+        .expect("needle in file")
+        + 1
+}
+
+#[test]
+fn unknown_key_names_file_line_column_and_field() {
+    let (err, path, _dir) =
+        check_error("retreat_mm = 30.0", "retreat_mm = 30.0\nretreat_speed = 4");
+    let line = line_of(&path, "retreat_speed");
+    assert!(
+        err.contains(&format!(
+            "{}:{line}:1: regrasp.retreat_speed: unknown field `retreat_speed`",
+            path.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("expected `max_regrasps` or `retreat_mm`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn out_of_range_value_is_reported_at_the_value() {
+    let (err, path, _dir) = check_error("n_mm = 1.0", "n_mm = -1.0");
+    let line = line_of(&path, "n_mm = -1.0");
+    assert!(
+        err.contains(&format!(
+            ":{line}:8: tolerance.n_mm: expected a number > 0, found -1"
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn wrong_type_says_what_was_expected() {
+    let (err, _, _dir) = check_error("max_regrasps = 2", "max_regrasps = \"two\"");
+    assert!(
+        err.contains("regrasp.max_regrasps: invalid type: string \"two\", expected u32"),
+        "{err}"
+    );
+}
+
+#[test]
+fn missing_field_names_the_table() {
+    let (err, _, _dir) = check_error("grip_current_a = 1.0\n", "");
+    assert!(
+        err.contains("grasp: missing field `grip_current_a`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn angle_outside_half_turn_is_refused() {
+    let (err, _, _dir) = check_error("alpha_rad = 0.0", "alpha_rad = 2.0");
+    assert!(
+        err.contains("target.alpha_rad: expected an angle in (-π/2, π/2] rad, found 2"),
+        "{err}"
+    );
+}
+
+#[test]
+fn broken_toml_gives_its_position() {
+    let (err, path, _dir) = check_error("[approach]", "[approach");
+    let line = line_of(&path, "[approach");
+    assert!(
+        err.contains(&format!("{}:{line}:", path.display())),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_backend_lists_the_known_ones() {
+    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("cell.toml");
+    std::fs::write(
+        &path,
+        text.replace("[arm.backend.sim]", "[arm.backend.ur5]"),
+    )
+    .expect("write");
+    let out = cablecell(&["check", path.to_str().expect("utf-8")]);
+    assert_eq!(out.status.code(), Some(BAD_INPUT));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("arm.backend: unknown variant `ur5`, expected `sim`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_file_that_is_neither_task_nor_cell_is_named_as_such() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("other.toml");
+    std::fs::write(&path, "[campaign]\nname = \"x\"\n").expect("write");
+    let out = cablecell(&["check", path.to_str().expect("utf-8")]);
+    assert_eq!(out.status.code(), Some(BAD_INPUT));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a task or cell file"));
+}
+
+#[test]
+fn missing_file_is_named() {
+    let out = cablecell(&["run", "tasks/no-such-task.toml"]);
+    assert_eq!(out.status.code(), Some(BAD_INPUT));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tasks/no-such-task.toml: cannot read the file"),
+        "{err}"
+    );
+}
+
+#[test]
+fn check_accepts_the_shipped_files() {
+    let out = cablecell(&["check", "tasks/regrasp.toml", "config/cell.sim.toml"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("tasks/regrasp.toml: ok (task file)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("config/cell.sim.toml: ok (cell file)"),
+        "{text}"
+    );
+}

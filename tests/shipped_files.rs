@@ -1,0 +1,40 @@
+//! Every task and cell file shipped in `tasks/` and `config/` is valid.
+
+use std::path::Path;
+
+use cablecell::task::{FileKind, check_file};
+
+fn toml_files(dir: &str) -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|entry| entry.expect("directory entry").path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn every_task_file_is_a_valid_task() {
+    let files = toml_files("tasks");
+    assert!(!files.is_empty());
+    for file in files {
+        match check_file(&file) {
+            Ok(kind) => assert_eq!(kind, FileKind::Task, "{}", file.display()),
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
+#[test]
+fn every_cell_file_is_a_valid_cell() {
+    let files = toml_files("config");
+    assert!(!files.is_empty());
+    for file in files {
+        match check_file(&file) {
+            Ok(kind) => assert_eq!(kind, FileKind::Cell, "{}", file.display()),
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
