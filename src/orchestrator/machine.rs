@@ -407,3 +407,270 @@ fn fault(
     });
     Transition(State::fault())
 }
+
+#[cfg(test)]
+mod tests {
+    //! The machine alone, fed events by hand: no cell, no I/O.
+
+    use nalgebra::{Isometry2, Translation3, UnitQuaternion, Vector2, Vector3};
+
+    use super::*;
+    use crate::geometry::{LineInSensor, PoseError};
+    use crate::hw::detector::CableDetection;
+    use crate::hw::{DeviceError, DeviceKind};
+    use crate::perception::tactile::FitConfig;
+    use crate::sim::tactile_model::TactileModel;
+    use crate::sim::{Stream, rng};
+    use crate::task::cell_file::SimTactileConfig;
+
+    fn plan(max_regrasps: u32) -> Plan {
+        Plan {
+            target: LineInSensor::new(0.0, 0.0),
+            tolerance: PoseError {
+                n_mm: 0.5,
+                alpha_rad: 0.05,
+            },
+            standoff_mm: 50.0,
+            speed_mm_s: 100.0,
+            open_mm: 20.0,
+            grip_current_a: 1.0,
+            max_regrasps,
+            retreat_mm: 30.0,
+            bias_frames: 50,
+            average_frames: 4,
+            fit: FitConfig {
+                pitch_mm: 3.55,
+                contact_threshold_v: 0.05,
+            },
+            tcp_from_sensor: Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, -10.0),
+                UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
+            ),
+        }
+    }
+
+    struct Harness {
+        machine: statig::blocking::InitializedStateMachine<GraspTask>,
+        context: Context,
+        model: TactileModel,
+    }
+
+    impl Harness {
+        fn new(max_regrasps: u32) -> Self {
+            let plan = plan(max_regrasps);
+            let record = RunRecord::new("t", "c", 0, plan.target, plan.tolerance);
+            let mut context = Context::new(record);
+            let machine = GraspTask::new(plan)
+                .uninitialized_state_machine()
+                .init_with_context(&mut context);
+            let noiseless = SimTactileConfig {
+                line_spread_pitch: 0.55,
+                span_v: 1.2,
+                rest_v: [0.9, 1.5],
+                gain_spread: 0.0,
+                noise_fraction: 0.0,
+                silent_after_frames: None,
+            };
+            let model = TactileModel::new(&noiseless, 3.55, &mut rng(0, Stream::TactileCalibration));
+            Self {
+                machine,
+                context,
+                model,
+            }
+        }
+
+        fn feed(&mut self, event: Event) -> Option<Command> {
+            self.machine.handle_with_context(&event, &mut self.context);
+            self.context.command.take()
+        }
+
+        fn frames(&self, count: usize, pressed: Option<LineInSensor>) -> Event {
+            let mut r = rng(1, Stream::Tactile);
+            let raw = self.model.frame(pressed.map(|line| (line, 2.5)), &mut r);
+            Event::Tactile(vec![TactileFrame { t_s: 0.0, raw }; count])
+        }
+
+        fn state(&self) -> &'static str {
+            self.machine.state().name()
+        }
+
+        /// Start, bias, a detected cable at the origin, arrival.
+        fn to_trial_grasp(&mut self) -> Command {
+            assert!(matches!(self.feed(Event::Start), Some(Command::Prepare { bias_frames: 50, .. })));
+            let bias = self.frames(50, None);
+            assert_eq!(self.feed(bias), Some(Command::Detect));
+            let detection = CableDetection {
+                base_from_cable: Isometry3::identity(),
+            };
+            let moved = self.feed(Event::Detected(vec![detection]));
+            assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
+            self.feed(Event::Arrived).expect("grasp command")
+        }
+
+        fn grasped_at(&mut self, base_from_tcp: Isometry3<f64>) -> Option<Command> {
+            self.feed(Event::Grasped {
+                base_from_tcp,
+                grip: GripOutcome::Holding { opening_mm: 2.2 },
+            })
+        }
+    }
+
+    #[test]
+    fn the_trial_grasp_aims_the_pad_at_the_detected_cable() {
+        let mut h = Harness::new(1);
+        let Command::Grasp { base_from_tcp, .. } = h.to_trial_grasp() else {
+            panic!("expected a grasp");
+        };
+        // With a zero target the sensor frame is the cable's frame.
+        let base_from_sensor = base_from_tcp * plan(1).tcp_from_sensor;
+        assert!((base_from_sensor.translation.vector).norm() < 1e-9);
+        assert!(base_from_sensor.rotation.angle() < 1e-9);
+        assert_eq!(h.state(), "trial_grasp");
+    }
+
+    #[test]
+    fn a_grasp_within_tolerance_is_done_without_regrasp() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        assert!(matches!(h.grasped_at(Isometry3::identity()), Some(Command::ReadTactile { frames: 4 })));
+        let on_target = h.frames(4, Some(LineInSensor::new(0.0, 0.1)));
+        assert_eq!(h.feed(on_target), None);
+        assert_eq!(h.state(), "done");
+        assert!(matches!(h.context.record.outcome, Some(RunOutcome::Success { regrasps: 0 })));
+    }
+
+    #[test]
+    fn the_regrasp_aims_with_t_corr_from_the_measured_pose() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        let grasped = Isometry3::from_parts(
+            Translation3::new(400.0, 10.0, 300.0),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.4),
+        );
+        h.grasped_at(grasped);
+        let truth = LineInSensor::new(0.15, -2.0);
+        let Some(Command::Regrasp { base_from_tcp, .. }) = h.feed(h.frames(4, Some(truth))) else {
+            panic!("expected a regrasp in {}", h.state());
+        };
+        // Where the true cable lies in the new pad frame: near the target.
+        let tcp_from_sensor = plan(1).tcp_from_sensor;
+        let old_from_new = (grasped * tcp_from_sensor).inverse() * (base_from_tcp * tcp_from_sensor);
+        assert!(old_from_new.translation.vector.z.abs() < 1e-9, "stays in the pad's plane");
+        let (_, _, yaw) = old_from_new.rotation.euler_angles();
+        let t = old_from_new.translation.vector;
+        let new_from_old = Isometry2::new(Vector2::new(t.x, t.y), yaw).inverse();
+        let error = truth.transformed(&new_from_old).error_to(&LineInSensor::new(0.0, 0.0));
+        assert!(error.n_mm.abs() < 0.2 && error.alpha_rad.abs() < 0.02, "{error:?}");
+        assert_eq!(h.state(), "regrasp");
+    }
+
+    #[test]
+    fn out_of_tolerance_after_the_last_regrasp_fails() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        h.grasped_at(Isometry3::identity());
+        let off = h.frames(4, Some(LineInSensor::new(0.2, 2.0)));
+        assert!(matches!(h.feed(off.clone()), Some(Command::Regrasp { .. })));
+        assert!(matches!(h.grasped_at(Isometry3::identity()), Some(Command::ReadTactile { .. })));
+        assert_eq!(h.state(), "verify");
+        assert_eq!(h.feed(off), None);
+        assert_eq!(h.state(), "failed");
+        match &h.context.record.outcome {
+            Some(RunOutcome::Failed {
+                reason: Failure::ToleranceNotReached { regrasps: 1, error },
+            }) => assert!(error.n_mm > 1.5),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(h.context.record.grasps.len(), 2);
+    }
+
+    #[test]
+    fn no_cable_on_the_pad_fails_with_its_peak() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        h.grasped_at(Isometry3::identity());
+        let empty = h.frames(4, None);
+        h.feed(empty);
+        assert_eq!(h.state(), "failed");
+        assert!(matches!(
+            h.context.record.outcome,
+            Some(RunOutcome::Failed {
+                reason: Failure::NoContact { attempt: 0, .. }
+            })
+        ));
+    }
+
+    #[test]
+    fn empty_jaws_and_no_detection_fail() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        h.feed(Event::Grasped {
+            base_from_tcp: Isometry3::identity(),
+            grip: GripOutcome::Empty,
+        });
+        assert_eq!(h.state(), "failed");
+
+        let mut h = Harness::new(1);
+        h.feed(Event::Start);
+        h.feed(h.frames(50, None));
+        h.feed(Event::Detected(Vec::new()));
+        assert_eq!(h.state(), "failed");
+        assert!(matches!(
+            h.context.record.outcome,
+            Some(RunOutcome::Failed {
+                reason: Failure::NothingDetected
+            })
+        ));
+    }
+
+    #[test]
+    fn a_device_fault_in_any_step_leads_to_a_safe_stop() {
+        let mut h = Harness::new(1);
+        h.feed(Event::Start);
+        h.feed(h.frames(50, None));
+        h.feed(Event::Detected(vec![CableDetection {
+            base_from_cable: Isometry3::identity(),
+        }]));
+        assert_eq!(h.state(), "approach");
+        let error = DeviceError::Timeout {
+            device: DeviceKind::Arm,
+            waited_ms: 500,
+        };
+        assert_eq!(h.feed(Event::DeviceFault(error)), Some(Command::SafeStop { open_mm: 20.0 }));
+        assert_eq!(h.state(), "fault");
+        match &h.context.record.outcome {
+            Some(RunOutcome::Fault { state, device, .. }) => {
+                assert_eq!(*state, "approach");
+                assert_eq!(*device, Some(DeviceKind::Arm));
+            }
+            other => panic!("{other:?}"),
+        }
+        let stuck = DeviceError::Refused {
+            device: DeviceKind::Gripper,
+            command: "move_to",
+            reason: "not referenced".into(),
+        };
+        assert_eq!(h.feed(Event::Stopped { problems: vec![stuck] }), None);
+        assert_eq!(h.context.record.safe_stop_problems.len(), 1);
+        assert_eq!(h.state(), "fault");
+    }
+
+    #[test]
+    fn abort_while_evaluating_stops_and_keeps_the_record() {
+        let mut h = Harness::new(1);
+        h.to_trial_grasp();
+        h.grasped_at(Isometry3::identity());
+        assert_eq!(h.state(), "evaluate");
+        assert!(matches!(h.feed(Event::Abort), Some(Command::SafeStop { .. })));
+        let states: Vec<_> = h.context.record.transitions.iter().map(|t| t.to).collect();
+        assert_eq!(states, ["prepare", "detect", "approach", "trial_grasp", "evaluate", "fault"]);
+    }
+
+    #[test]
+    fn too_few_bias_frames_is_a_fault() {
+        let mut h = Harness::new(1);
+        h.feed(Event::Start);
+        h.feed(h.frames(10, None));
+        assert_eq!(h.state(), "fault");
+    }
+}

@@ -441,4 +441,16 @@ mod tests {
             (0, 0, 0)
         );
     }
+
+    #[test]
+    fn explore() {
+        for (a, o) in [(FRAC_PI_2, 0.0), (FRAC_PI_2, -2.0), (0.0, 2.0), (FRAC_PI_6, 0.0), (-FRAC_PI_6, 0.0), (FRAC_PI_6, 2.0), (2.0*FRAC_PI_6, 0.0), (-2.0*FRAC_PI_6, 1.0)] {
+            let f = fit_wire(&render_line(line_at(a, o), 1.0), &config()).unwrap();
+            println!("{a:.4} {o:.3} -> {:?} {:.6} {:.6} m={:?} n={:?} q={:?}", f.direction, f.line.alpha_rad, f.line.offset_mm, f.slope_m, f.intercept_n_mm, f.quadratic);
+        }
+        for (q, d) in [(Quadratic{a:0.04,b:-0.1,c:-1.0}, Direction::Horizontal), (Quadratic{a:-0.04,b:0.2,c:0.5}, Direction::Vertical), (Quadratic{a:0.06,b:0.0,c:-1.5}, Direction::Horizontal)] {
+            let f = fit_wire(&render_parabola(q, d, 1.0), &config()).unwrap();
+            println!("{q:?} -> {:?} {:?} {:?}", f.direction, f.quadratic, f.centroids);
+        }
+    }
 }
