@@ -78,13 +78,20 @@ impl LineInSensor {
         Isometry2::new(foot, self.alpha_rad)
     }
 
-    /// How far this line is from `target`: offset difference and angle
-    /// difference wrapped into (-π/2, π/2].
+    /// How far this line is from `target`: angle difference wrapped into
+    /// (-π/2, π/2], and offset difference measured along the target's
+    /// normal (near ±π/2 the two normals can point opposite ways).
     pub fn error_to(&self, target: &LineInSensor) -> PoseError {
-        let d_alpha = LineInSensor::new(self.alpha_rad - target.alpha_rad, 0.0).alpha_rad;
+        let seen_from_target = LineInSensor::new(self.alpha_rad - target.alpha_rad, self.offset_mm);
+        let same_normal = seen_from_target.offset_mm == self.offset_mm;
+        let offset_mm = if same_normal {
+            self.offset_mm
+        } else {
+            -self.offset_mm
+        };
         PoseError {
-            n_mm: self.offset_mm - target.offset_mm,
-            alpha_rad: d_alpha,
+            n_mm: offset_mm - target.offset_mm,
+            alpha_rad: seen_from_target.alpha_rad,
         }
     }
 
@@ -196,10 +203,14 @@ mod tests {
     }
 
     #[test]
-    fn error_wraps_angle_across_vertical() {
-        let a = LineInSensor::new(FRAC_PI_2 - 0.01, 0.0);
-        let b = LineInSensor::new(-FRAC_PI_2 + 0.01, 0.0);
+    fn error_wraps_angle_and_aligns_normals_across_vertical() {
+        // Two nearly identical lines along y, on either side of ±π/2.
+        let a = LineInSensor::new(FRAC_PI_2 - 0.01, 2.0);
+        let b = LineInSensor::new(-FRAC_PI_2 + 0.01, -2.0);
         let err = a.error_to(&b);
         assert_relative_eq!(err.alpha_rad, -0.02, epsilon = 1e-9);
+        assert_relative_eq!(err.n_mm, 0.0, epsilon = 1e-9);
+        let shifted = LineInSensor::new(-FRAC_PI_2 + 0.01, -2.5);
+        assert_relative_eq!(a.error_to(&shifted).n_mm, 0.5, epsilon = 1e-9);
     }
 }

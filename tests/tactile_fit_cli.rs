@@ -27,7 +27,13 @@ fn map(hot: impl Fn(usize, usize) -> bool, value: f64) -> String {
     (0..5)
         .map(|i| {
             (0..5)
-                .map(|j| if hot(i, j) { value.to_string() } else { "0".into() })
+                .map(|j| {
+                    if hot(i, j) {
+                        value.to_string()
+                    } else {
+                        "0".into()
+                    }
+                })
                 .collect::<Vec<_>>()
                 .join(" ")
         })
@@ -38,7 +44,12 @@ fn map(hot: impl Fn(usize, usize) -> bool, value: f64) -> String {
 #[test]
 fn a_cable_across_the_middle_row_is_horizontal_through_the_centre() {
     let out = tactile_fit(&[], &map(|i, _| i == 2, 0.8));
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let fit: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(fit["direction"], "horizontal");
     assert_eq!(fit["centroids"].as_array().map(Vec::len), Some(5));
@@ -52,14 +63,24 @@ fn a_cable_across_the_middle_row_is_horizontal_through_the_centre() {
 fn a_cable_down_the_last_column_is_vertical_and_finite() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("map.json");
-    let values: Vec<f64> = (0..25).map(|k| if k % 5 == 4 { 0.5 } else { 0.0 }).collect();
+    let values: Vec<f64> = (0..25)
+        .map(|k| if k % 5 == 4 { 0.5 } else { 0.0 })
+        .collect();
     std::fs::write(&path, serde_json::to_string(&values).expect("json")).expect("write");
     let out = tactile_fit(&[path.to_str().expect("utf-8")], "");
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let fit: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(fit["direction"], "vertical");
     let alpha = fit["line"]["alpha_rad"].as_f64().expect("alpha");
-    assert!((alpha - std::f64::consts::FRAC_PI_2).abs() < 1e-9, "{alpha}");
+    assert!(
+        (alpha - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+        "{alpha}"
+    );
     // x = +2 pitches; the normal of a line at +π/2 is -x.
     let offset = fit["line"]["offset_mm"].as_f64().expect("offset");
     assert!((offset + 7.1).abs() < 1e-9, "{offset}");
@@ -88,4 +109,11 @@ fn an_empty_pad_is_no_contact() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.to_lowercase().contains("contact"), "{err}");
+}
+
+#[test]
+fn a_nonsense_pitch_is_bad_input() {
+    let out = tactile_fit(&["--pitch-mm", "0"], &map(|i, _| i == 2, 0.8));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("pitch"));
 }

@@ -3,7 +3,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use cablecell::perception::tactile::{FitConfig, TactileMap, fit_wire};
+use cablecell::perception::tactile::{FitConfig, FitError, TactileMap, fit_wire};
 
 use super::Status;
 
@@ -37,6 +37,10 @@ pub fn tactile_fit(file: Option<&Path>, pitch_mm: f64, contact_threshold_v: f64)
                 Status::TaskFailed
             }
         },
+        Err(error @ FitError::InvalidConfig { .. }) => {
+            eprintln!("error: {error}");
+            Status::BadInput
+        }
         Err(error) => {
             eprintln!("error: {source}: {error}");
             Status::TaskFailed

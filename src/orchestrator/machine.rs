@@ -471,7 +471,8 @@ mod tests {
                 noise_fraction: 0.0,
                 silent_after_frames: None,
             };
-            let model = TactileModel::new(&noiseless, 3.55, &mut rng(0, Stream::TactileCalibration));
+            let model =
+                TactileModel::new(&noiseless, 3.55, &mut rng(0, Stream::TactileCalibration));
             Self {
                 machine,
                 context,
@@ -495,8 +496,14 @@ mod tests {
         }
 
         /// Start, bias, a detected cable at the origin, arrival.
-        fn to_trial_grasp(&mut self) -> Command {
-            assert!(matches!(self.feed(Event::Start), Some(Command::Prepare { bias_frames: 50, .. })));
+        fn up_to_trial_grasp(&mut self) -> Command {
+            assert!(matches!(
+                self.feed(Event::Start),
+                Some(Command::Prepare {
+                    bias_frames: 50,
+                    ..
+                })
+            ));
             let bias = self.frames(50, None);
             assert_eq!(self.feed(bias), Some(Command::Detect));
             let detection = CableDetection {
@@ -518,7 +525,7 @@ mod tests {
     #[test]
     fn the_trial_grasp_aims_the_pad_at_the_detected_cable() {
         let mut h = Harness::new(1);
-        let Command::Grasp { base_from_tcp, .. } = h.to_trial_grasp() else {
+        let Command::Grasp { base_from_tcp, .. } = h.up_to_trial_grasp() else {
             panic!("expected a grasp");
         };
         // With a zero target the sensor frame is the cable's frame.
@@ -531,18 +538,24 @@ mod tests {
     #[test]
     fn a_grasp_within_tolerance_is_done_without_regrasp() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
-        assert!(matches!(h.grasped_at(Isometry3::identity()), Some(Command::ReadTactile { frames: 4 })));
+        h.up_to_trial_grasp();
+        assert!(matches!(
+            h.grasped_at(Isometry3::identity()),
+            Some(Command::ReadTactile { frames: 4 })
+        ));
         let on_target = h.frames(4, Some(LineInSensor::new(0.0, 0.1)));
         assert_eq!(h.feed(on_target), None);
         assert_eq!(h.state(), "done");
-        assert!(matches!(h.context.record.outcome, Some(RunOutcome::Success { regrasps: 0 })));
+        assert!(matches!(
+            h.context.record.outcome,
+            Some(RunOutcome::Success { regrasps: 0 })
+        ));
     }
 
     #[test]
     fn the_regrasp_aims_with_t_corr_from_the_measured_pose() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
+        h.up_to_trial_grasp();
         let grasped = Isometry3::from_parts(
             Translation3::new(400.0, 10.0, 300.0),
             UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.4),
@@ -554,24 +567,36 @@ mod tests {
         };
         // Where the true cable lies in the new pad frame: near the target.
         let tcp_from_sensor = plan(1).tcp_from_sensor;
-        let old_from_new = (grasped * tcp_from_sensor).inverse() * (base_from_tcp * tcp_from_sensor);
-        assert!(old_from_new.translation.vector.z.abs() < 1e-9, "stays in the pad's plane");
+        let old_from_new =
+            (grasped * tcp_from_sensor).inverse() * (base_from_tcp * tcp_from_sensor);
+        assert!(
+            old_from_new.translation.vector.z.abs() < 1e-9,
+            "stays in the pad's plane"
+        );
         let (_, _, yaw) = old_from_new.rotation.euler_angles();
         let t = old_from_new.translation.vector;
         let new_from_old = Isometry2::new(Vector2::new(t.x, t.y), yaw).inverse();
-        let error = truth.transformed(&new_from_old).error_to(&LineInSensor::new(0.0, 0.0));
-        assert!(error.n_mm.abs() < 0.2 && error.alpha_rad.abs() < 0.02, "{error:?}");
+        let error = truth
+            .transformed(&new_from_old)
+            .error_to(&LineInSensor::new(0.0, 0.0));
+        assert!(
+            error.n_mm.abs() < 0.2 && error.alpha_rad.abs() < 0.02,
+            "{error:?}"
+        );
         assert_eq!(h.state(), "regrasp");
     }
 
     #[test]
     fn out_of_tolerance_after_the_last_regrasp_fails() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
+        h.up_to_trial_grasp();
         h.grasped_at(Isometry3::identity());
         let off = h.frames(4, Some(LineInSensor::new(0.2, 2.0)));
         assert!(matches!(h.feed(off.clone()), Some(Command::Regrasp { .. })));
-        assert!(matches!(h.grasped_at(Isometry3::identity()), Some(Command::ReadTactile { .. })));
+        assert!(matches!(
+            h.grasped_at(Isometry3::identity()),
+            Some(Command::ReadTactile { .. })
+        ));
         assert_eq!(h.state(), "verify");
         assert_eq!(h.feed(off), None);
         assert_eq!(h.state(), "failed");
@@ -587,7 +612,7 @@ mod tests {
     #[test]
     fn no_cable_on_the_pad_fails_with_its_peak() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
+        h.up_to_trial_grasp();
         h.grasped_at(Isometry3::identity());
         let empty = h.frames(4, None);
         h.feed(empty);
@@ -603,7 +628,7 @@ mod tests {
     #[test]
     fn empty_jaws_and_no_detection_fail() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
+        h.up_to_trial_grasp();
         h.feed(Event::Grasped {
             base_from_tcp: Isometry3::identity(),
             grip: GripOutcome::Empty,
@@ -636,7 +661,10 @@ mod tests {
             device: DeviceKind::Arm,
             waited_ms: 500,
         };
-        assert_eq!(h.feed(Event::DeviceFault(error)), Some(Command::SafeStop { open_mm: 20.0 }));
+        assert_eq!(
+            h.feed(Event::DeviceFault(error)),
+            Some(Command::SafeStop { open_mm: 20.0 })
+        );
         assert_eq!(h.state(), "fault");
         match &h.context.record.outcome {
             Some(RunOutcome::Fault { state, device, .. }) => {
@@ -650,7 +678,12 @@ mod tests {
             command: "move_to",
             reason: "not referenced".into(),
         };
-        assert_eq!(h.feed(Event::Stopped { problems: vec![stuck] }), None);
+        assert_eq!(
+            h.feed(Event::Stopped {
+                problems: vec![stuck]
+            }),
+            None
+        );
         assert_eq!(h.context.record.safe_stop_problems.len(), 1);
         assert_eq!(h.state(), "fault");
     }
@@ -658,12 +691,25 @@ mod tests {
     #[test]
     fn abort_while_evaluating_stops_and_keeps_the_record() {
         let mut h = Harness::new(1);
-        h.to_trial_grasp();
+        h.up_to_trial_grasp();
         h.grasped_at(Isometry3::identity());
         assert_eq!(h.state(), "evaluate");
-        assert!(matches!(h.feed(Event::Abort), Some(Command::SafeStop { .. })));
+        assert!(matches!(
+            h.feed(Event::Abort),
+            Some(Command::SafeStop { .. })
+        ));
         let states: Vec<_> = h.context.record.transitions.iter().map(|t| t.to).collect();
-        assert_eq!(states, ["prepare", "detect", "approach", "trial_grasp", "evaluate", "fault"]);
+        assert_eq!(
+            states,
+            [
+                "prepare",
+                "detect",
+                "approach",
+                "trial_grasp",
+                "evaluate",
+                "fault"
+            ]
+        );
     }
 
     #[test]

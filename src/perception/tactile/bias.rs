@@ -133,5 +133,85 @@ impl Bias {
 /// Whether a count is the ADC's full scale (after masking the high nibble,
 /// like [`raw_to_volts`], so that both agree on what the taxel read).
 fn is_saturated(raw: u16) -> bool {
-    raw & ADC_MAX >= ADC_MAX
+    raw & ADC_MAX == ADC_MAX
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(raw: u16) -> RawFrame {
+        [raw; TAXEL_COUNT]
+    }
+
+    #[test]
+    fn bias_is_the_mean_of_the_first_frames_only() {
+        let mut estimator = BiasEstimator::new(3);
+        assert_eq!(estimator.push(&frame(100)), None);
+        assert_eq!(estimator.push(&frame(200)), None);
+        assert!(!estimator.is_complete());
+        let bias = estimator.push(&frame(0x3000 | 300)).unwrap();
+        assert!(estimator.is_complete());
+        assert_eq!(bias.offset_v[2][3], raw_to_volts(200));
+        // A cable pressed later does not move the offsets.
+        assert_eq!(estimator.push(&frame(4000)), Some(bias.clone()));
+        assert_eq!(estimator.bias(), Some(&bias));
+    }
+
+    #[test]
+    fn each_taxel_has_its_own_offset() {
+        let mut estimator = BiasEstimator::new(2);
+        let ramp: RawFrame = std::array::from_fn(|k| 1000 + k as u16);
+        estimator.push(&ramp);
+        let bias = estimator.push(&ramp).unwrap();
+        // c21 is the sixth value of a frame.
+        assert_eq!(bias.offset_v[1][0], raw_to_volts(1005));
+        assert_eq!(bias.remove(&ramp).peak_dv_v(), 0.0);
+    }
+
+    #[test]
+    fn zero_samples_means_one() {
+        let mut estimator = BiasEstimator::new(0);
+        assert!(estimator.push(&frame(10)).is_some());
+        assert_eq!(
+            BiasEstimator::default().samples_required,
+            PAPER_BIAS_SAMPLES
+        );
+    }
+
+    #[test]
+    fn remove_subtracts_and_flags_full_scale() {
+        let bias = Bias {
+            offset_v: [[raw_to_volts(1000); TAXEL_COLS]; TAXEL_ROWS],
+        };
+        let mut raw = frame(1000);
+        raw[0] = 1500;
+        raw[6] = 500;
+        raw[12] = ADC_MAX;
+        raw[24] = 0xFFFF;
+        let map = bias.remove(&raw);
+        assert_eq!(map.dv_v[0][0], raw_to_volts(1500) - raw_to_volts(1000));
+        assert!(map.dv_v[1][1] < 0.0);
+        assert_eq!(map.dv_v[0][1], 0.0);
+        let flagged: Vec<(usize, usize)> = (0..TAXEL_ROWS)
+            .flat_map(|i| (0..TAXEL_COLS).map(move |j| (i, j)))
+            .filter(|&(i, j)| map.saturated[i][j])
+            .collect();
+        assert_eq!(flagged, [(2, 2), (4, 4)]);
+    }
+
+    #[test]
+    fn remove_mean_averages_and_keeps_any_saturation() {
+        let bias = Bias {
+            offset_v: [[raw_to_volts(1000); TAXEL_COLS]; TAXEL_ROWS],
+        };
+        assert_eq!(bias.remove_mean(&[]), None);
+        let mut hot = frame(1100);
+        hot[3] = ADC_MAX;
+        let map = bias.remove_mean(&[frame(1000), hot, frame(1200)]).unwrap();
+        assert_eq!(map.dv_v[4][4], raw_to_volts(1100) - raw_to_volts(1000));
+        assert!(map.saturated[0][3]);
+        assert_eq!(map.saturated.iter().flatten().filter(|&&s| s).count(), 1);
+        assert_eq!(bias.remove_mean(&[hot]), Some(bias.remove(&hot)));
+    }
 }

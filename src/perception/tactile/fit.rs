@@ -30,7 +30,7 @@ use std::fmt;
 use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
-use super::map::{TAXEL_COLS, TAXEL_ROWS, TactileMap};
+use super::map::{TAXEL_COLS, TAXEL_ROWS, TactileMap, taxel_x_mm, taxel_y_mm};
 use crate::geometry::LineInSensor;
 
 /// The paper's taxel pitch.
@@ -77,6 +77,10 @@ impl Default for FitConfig {
 
 /// Smallest and largest pitch accepted: outside, it is a unit mistake.
 const PITCH_RANGE_MM: (f64, f64) = (1e-6, 1e6);
+
+/// Columns and rows are treated alike, so the pad must be square.
+const LINES: usize = TAXEL_COLS;
+const _: () = assert!(TAXEL_ROWS == TAXEL_COLS);
 
 /// One centroid of eq. 5 (a column's) or eq. 6 (a row's).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -199,8 +203,8 @@ impl Weights {
 /// Centroids as (grid coordinate, centroid coordinate) in pitches: for a
 /// horizontal cable (x_j, y_j^c), for a vertical one (y_i, x_i^c).
 struct Samples {
-    u: [f64; 5],
-    t: [f64; 5],
+    u: [f64; LINES],
+    t: [f64; LINES],
     len: usize,
 }
 
@@ -221,8 +225,8 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
 
     let weights = Weights::of(map);
     let peak_v = weights.peak_v;
-    // `!(peak > 0)` also catches a zero threshold on an all-zero map.
-    if !(peak_v > 0.0) || peak_v < contact_threshold_v {
+    // A zero peak is no contact even with a zero threshold.
+    if peak_v <= 0.0 || peak_v < contact_threshold_v {
         return Err(FitError::NoContact {
             peak_dv_v: peak_v,
             threshold_v: contact_threshold_v,
@@ -242,33 +246,41 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
     }
     let h = col_sums.iter().copied().fold(f64::INFINITY, f64::min);
     let v = row_sums.iter().copied().fold(f64::INFINITY, f64::min);
-    // The paper leaves h = v open (a single spot, a cable at exactly 45°):
-    // it goes to Vertical.
-    let direction = if h > v {
+    let touched = |sums: &[f64; LINES]| {
+        sums.iter()
+            .filter(|&&s| carries_contact(s, threshold))
+            .count()
+    };
+    // The paper leaves h = v open. It happens in clean maps whenever the
+    // cable spans neither all columns nor all rows (h = v = 0, a short
+    // piece or a single spot) and for symmetric diagonals. The direction
+    // with more centroids gives the better-determined fit; on a further
+    // tie, Vertical.
+    let direction = if h > v || (h == v && touched(&col_sums) > touched(&row_sums)) {
         Direction::Horizontal
     } else {
         Direction::Vertical
     };
 
-    // Grid coordinates in pitches: column j at x = j - 2, row i at y = 2 - i.
+    // Coordinates in pitches are those in mm at a pitch of 1.
     let mut samples = Samples {
-        u: [0.0; 5],
-        t: [0.0; 5],
+        u: [0.0; LINES],
+        t: [0.0; LINES],
         len: 0,
     };
-    let mut centroids = Vec::with_capacity(5);
-    for k in 0..5 {
+    let mut centroids = Vec::with_capacity(LINES);
+    for k in 0..LINES {
         let (sum, moment, u) = match direction {
             Direction::Horizontal => {
-                let moment: f64 = (0..TAXEL_ROWS).map(|i| (2.0 - i as f64) * w[i][k]).sum();
-                (col_sums[k], moment, k as f64 - 2.0)
+                let moment: f64 = (0..TAXEL_ROWS).map(|i| taxel_y_mm(i, 1.0) * w[i][k]).sum();
+                (col_sums[k], moment, taxel_x_mm(k, 1.0))
             }
             Direction::Vertical => {
-                let moment: f64 = (0..TAXEL_COLS).map(|j| (j as f64 - 2.0) * w[k][j]).sum();
-                (row_sums[k], moment, 2.0 - k as f64)
+                let moment: f64 = (0..TAXEL_COLS).map(|j| taxel_x_mm(j, 1.0) * w[k][j]).sum();
+                (row_sums[k], moment, taxel_y_mm(k, 1.0))
             }
         };
-        if sum < threshold || sum <= 0.0 {
+        if !carries_contact(sum, threshold) {
             continue;
         }
         let t = moment / sum;
@@ -310,6 +322,12 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
     })
 }
 
+/// Whether a column (row) sum, normalised like the threshold, carries the
+/// cable rather than noise; a zero threshold still needs some signal.
+fn carries_contact(sum: f64, threshold: f64) -> bool {
+    sum >= threshold && sum > 0.0
+}
+
 /// Least squares of t on u (at least 2 distinct u), as a line in mm.
 fn fit_line(samples: &Samples, direction: Direction, pitch_mm: f64) -> LineInSensor {
     let (u, t) = (&samples.u[..samples.len], &samples.t[..samples.len]);
@@ -339,8 +357,8 @@ fn fit_quadratic(samples: &Samples, pitch_mm: f64) -> Option<Quadratic> {
     let n = samples.len as f64;
     let u_mean = samples.u[..samples.len].iter().sum::<f64>() / n;
     // Unused rows stay zero: they add nothing to the residual.
-    let mut design = SMatrix::<f64, 5, 3>::zeros();
-    let mut rhs = SVector::<f64, 5>::zeros();
+    let mut design = SMatrix::<f64, LINES, 3>::zeros();
+    let mut rhs = SVector::<f64, LINES>::zeros();
     for k in 0..samples.len {
         let s = samples.u[k] - u_mean;
         design[(k, 0)] = s * s;
@@ -352,8 +370,8 @@ fn fit_quadratic(samples: &Samples, pitch_mm: f64) -> Option<Quadratic> {
     qr.q_tr_mul(&mut rhs);
     let coeffs = qr.r().solve_upper_triangular(&rhs.fixed_rows::<3>(0))?;
     let (a, b, c) = (coeffs[0], coeffs[1], coeffs[2]);
-    // t = a (u - ū)² + b (u - ū) + c in pitches; with u = x/p, t = y/p:
-    // y = (a/p) x² + (b - 2aū) x + p (aū² - bū + c).
+    // t = a (u - ū)² + b (u - ū) + c in pitches; back in mm, with
+    // u = U/p and t = T/p: T = (a/p) U² + (b - 2aū) U + p (aū² - bū + c).
     Some(Quadratic {
         a: a / pitch_mm,
         b: b - 2.0 * a * u_mean,
@@ -366,7 +384,6 @@ mod tests {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_6};
 
     use super::*;
-    use crate::perception::tactile::map::{taxel_x_mm, taxel_y_mm};
     use approx::assert_relative_eq;
 
     const PITCH: f64 = PAPER_PITCH_MM;
@@ -442,15 +459,332 @@ mod tests {
         );
     }
 
+    /// Max |Δα| and |Δoffset| of the fit against the truth.
+    fn line_error(fit: &LineInSensor, truth: &LineInSensor) -> (f64, f64) {
+        let err = fit.error_to(truth);
+        (err.alpha_rad.abs(), err.n_mm.abs())
+    }
+
     #[test]
-    fn explore() {
-        for (a, o) in [(FRAC_PI_2, 0.0), (FRAC_PI_2, -2.0), (0.0, 2.0), (FRAC_PI_6, 0.0), (-FRAC_PI_6, 0.0), (FRAC_PI_6, 2.0), (2.0*FRAC_PI_6, 0.0), (-2.0*FRAC_PI_6, 1.0)] {
-            let f = fit_wire(&render_line(line_at(a, o), 1.0), &config()).unwrap();
-            println!("{a:.4} {o:.3} -> {:?} {:.6} {:.6} m={:?} n={:?} q={:?}", f.direction, f.line.alpha_rad, f.line.offset_mm, f.slope_m, f.intercept_n_mm, f.quadratic);
+    fn cable_exactly_along_y_is_finite_at_a_right_angle() {
+        for x_mm in [0.0, 2.0, -1.5] {
+            let truth = LineInSensor::through(Vector2::new(x_mm, 0.0), Vector2::new(0.0, 1.0));
+            let fit = fit_wire(&render_line(truth, 0.8), &config()).unwrap();
+            assert_eq!(fit.direction, Direction::Vertical);
+            assert_eq!(fit.line.alpha_rad, FRAC_PI_2);
+            // The normal at +π/2 is -x; the sampling bias of the grid is
+            // below 0.035 mm (see tests/tactile_fit_properties.rs).
+            assert_relative_eq!(fit.line.offset_mm, -x_mm, epsilon = 0.035);
+            assert_eq!((fit.slope_m, fit.intercept_n_mm), (None, None));
+            for c in &fit.centroids {
+                assert_relative_eq!(c.x_mm, fit.centroids[0].x_mm, epsilon = 1e-12);
+            }
+            let q = fit.quadratic.unwrap();
+            assert_relative_eq!(q.c, x_mm, epsilon = 0.035);
+            assert_relative_eq!(q.a, 0.0, epsilon = 1e-12);
         }
-        for (q, d) in [(Quadratic{a:0.04,b:-0.1,c:-1.0}, Direction::Horizontal), (Quadratic{a:-0.04,b:0.2,c:0.5}, Direction::Vertical), (Quadratic{a:0.06,b:0.0,c:-1.5}, Direction::Horizontal)] {
-            let f = fit_wire(&render_parabola(q, d, 1.0), &config()).unwrap();
-            println!("{q:?} -> {:?} {:?} {:?}", f.direction, f.quadratic, f.centroids);
+    }
+
+    #[test]
+    fn offset_horizontal_cable_gives_intercept() {
+        let fit = fit_wire(&render_line(line_at(0.0, 2.0), 1.0), &config()).unwrap();
+        assert_eq!(fit.direction, Direction::Horizontal);
+        assert_relative_eq!(fit.line.alpha_rad, 0.0, epsilon = 1e-12);
+        // 2 mm sits between rows, where the sampled spread's centroid is
+        // 0.013 mm off.
+        assert_relative_eq!(fit.line.offset_mm, 2.0, epsilon = 0.02);
+        assert_relative_eq!(
+            fit.intercept_n_mm.unwrap(),
+            fit.line.offset_mm,
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn diagonals_at_thirty_degrees() {
+        for alpha in [FRAC_PI_6, -FRAC_PI_6] {
+            let truth = line_at(alpha, 0.0);
+            let fit = fit_wire(&render_line(truth, 1.0), &config()).unwrap();
+            assert_eq!(fit.direction, Direction::Horizontal);
+            // The edge columns see the ridge cut by the pad's edge, which
+            // pulls their centroids in: 5.7 mrad measured.
+            let (d_alpha, d_offset) = line_error(&fit.line, &truth);
+            assert!(d_alpha < 0.007, "{d_alpha}");
+            assert!(d_offset < 1e-9, "{d_offset}");
+            let (m, n) = (fit.slope_m.unwrap(), fit.intercept_n_mm.unwrap());
+            assert_relative_eq!(m, fit.line.alpha_rad.tan(), epsilon = 1e-12);
+            assert_relative_eq!(n, 0.0, epsilon = 1e-9);
+        }
+        // At 60° the cable runs closer to y: row centroids.
+        let truth = line_at(2.0 * FRAC_PI_6, 1.0);
+        let fit = fit_wire(&render_line(truth, 1.0), &config()).unwrap();
+        assert_eq!(fit.direction, Direction::Vertical);
+        let (d_alpha, d_offset) = line_error(&fit.line, &truth);
+        assert!(d_alpha < 0.015 && d_offset < 0.05, "{d_alpha} {d_offset}");
+    }
+
+    /// A map whose centroids are exactly `t(u)`: each column (row) holds
+    /// its unit of Δv on the two taxels around `t`, split so that eq. 5/6
+    /// returns `t` exactly.
+    fn render_exact(direction: Direction, t_mm: impl Fn(f64) -> f64) -> TactileMap {
+        TactileMap::from_fn(|row, col| {
+            // Taxel m along its column (row), counted from the top (from
+            // the left), and where t falls along it, in pitches.
+            let (m, along) = match direction {
+                Direction::Horizontal => (row, 2.0 - t_mm(taxel_x_mm(col, PITCH)) / PITCH),
+                Direction::Vertical => (col, 2.0 + t_mm(taxel_y_mm(row, PITCH)) / PITCH),
+            };
+            let low = (along.floor() as usize).min(3);
+            let frac = along - low as f64;
+            if m == low {
+                1.0 - frac
+            } else if m == low + 1 {
+                frac
+            } else {
+                0.0
+            }
+        })
+    }
+
+    #[test]
+    fn quadratic_is_exact_on_exact_centroids() {
+        let truth = Quadratic {
+            a: 0.05,
+            b: -0.2,
+            c: -1.0,
+        };
+        for direction in [Direction::Horizontal, Direction::Vertical] {
+            let map = render_exact(direction, |u| truth.a * u * u + truth.b * u + truth.c);
+            let fit = fit_wire(&map, &config()).unwrap();
+            assert_eq!(fit.direction, direction);
+            let q = fit.quadratic.unwrap();
+            assert_relative_eq!(q.a, truth.a, epsilon = 1e-12);
+            assert_relative_eq!(q.b, truth.b, epsilon = 1e-12);
+            assert_relative_eq!(q.c, truth.c, epsilon = 1e-12);
+        }
+    }
+
+    #[test]
+    fn line_is_exact_on_exact_centroids() {
+        let (m, n) = (0.3, 1.2);
+        let fit = fit_wire(
+            &render_exact(Direction::Horizontal, |x| m * x + n),
+            &config(),
+        )
+        .unwrap();
+        assert_relative_eq!(fit.slope_m.unwrap(), m, epsilon = 1e-12);
+        assert_relative_eq!(fit.intercept_n_mm.unwrap(), n, epsilon = 1e-12);
+        // x = 0.3 y + 1.2 is the line through (1.2, 0) along (0.3, 1).
+        let fit = fit_wire(&render_exact(Direction::Vertical, |y| m * y + n), &config()).unwrap();
+        let truth = LineInSensor::through(Vector2::new(n, 0.0), Vector2::new(m, 1.0));
+        let (d_alpha, d_offset) = line_error(&fit.line, &truth);
+        assert!(d_alpha < 1e-12 && d_offset < 1e-12, "{d_alpha} {d_offset}");
+    }
+
+    /// On a rendered parabola the quadratic's only error is the centroids'
+    /// bias, passed through the least squares linearly. That bias is
+    /// measured here (a tilted column sees the ridge wider and skewed
+    /// towards the concave side, and the edge cuts it), then bounded: with
+    /// centroids at u = -2..2 pitches, `a` is Σ (u²-2)/14 · t / pitch², so
+    /// |Δa| ≤ (8/14) δ / pitch², and a fitted value is a hat-matrix row
+    /// times the centroids, whose absolute sum is at most 51/35.
+    #[test]
+    fn curved_cable_recovers_the_parabola_up_to_centroid_bias() {
+        let cases = [
+            (
+                Quadratic {
+                    a: 0.06,
+                    b: 0.0,
+                    c: -1.5,
+                },
+                Direction::Horizontal,
+            ),
+            (
+                Quadratic {
+                    a: -0.04,
+                    b: 0.2,
+                    c: 0.5,
+                },
+                Direction::Vertical,
+            ),
+        ];
+        for (truth, direction) in cases {
+            let eval = |u: f64| truth.a * u * u + truth.b * u + truth.c;
+            let fit = fit_wire(&render_parabola(truth, direction, 1.0), &config()).unwrap();
+            assert_eq!(fit.direction, direction);
+            assert_eq!(fit.centroids.len(), 5);
+            type Coordinate = fn(&Centroid) -> f64;
+            let (u_of, t_of): (Coordinate, Coordinate) = match direction {
+                Direction::Horizontal => (|c: &Centroid| c.x_mm, |c: &Centroid| c.y_mm),
+                Direction::Vertical => (|c: &Centroid| c.y_mm, |c: &Centroid| c.x_mm),
+            };
+            let bias_mm = fit
+                .centroids
+                .iter()
+                .map(|c| (t_of(c) - eval(u_of(c))).abs())
+                .fold(0.0, f64::max);
+            // 0.137 mm measured for curvature 0.12/mm, σ = 1.95 mm.
+            assert!(bias_mm < 0.14, "{bias_mm}");
+            let q = fit.quadratic.unwrap();
+            assert!((q.a - truth.a).abs() <= 8.0 / 14.0 * bias_mm / (PITCH * PITCH));
+            for c in &fit.centroids {
+                let u = u_of(c);
+                let fitted = q.a * u * u + q.b * u + q.c;
+                assert!((fitted - eval(u)).abs() <= 51.0 / 35.0 * bias_mm);
+            }
+        }
+    }
+
+    #[test]
+    fn noise_alone_is_no_contact() {
+        // Deterministic noise within ±0.03 V, below the 0.05 V threshold.
+        let map = TactileMap::from_fn(|row, col| 0.03 * ((row * 7 + col * 13) as f64).sin());
+        match fit_wire(&map, &config()) {
+            Err(FitError::NoContact {
+                peak_dv_v,
+                threshold_v,
+            }) => {
+                assert!(peak_dv_v < 0.03 && peak_dv_v > 0.0);
+                assert_eq!(threshold_v, 0.05);
+            }
+            other => panic!("{other:?}"),
+        }
+        let empty = TactileMap::from_fn(|_, _| 0.0);
+        let zero_threshold = FitConfig {
+            contact_threshold_v: 0.0,
+            ..config()
+        };
+        assert!(matches!(
+            fit_wire(&empty, &zero_threshold),
+            Err(FitError::NoContact { peak_dv_v: 0.0, .. })
+        ));
+    }
+
+    /// One pressed taxel has h = v = 0 and one centroid either way: no line.
+    /// Two neighbours in a row tie the same way, but the tie goes to the
+    /// direction with more centroids, which gives the line through them.
+    #[test]
+    fn single_taxel_has_no_direction_but_two_make_a_line() {
+        let single = TactileMap::from_fn(|row, col| if (row, col) == (2, 2) { 0.5 } else { 0.0 });
+        assert_eq!(
+            fit_wire(&single, &config()),
+            Err(FitError::TooFewCentroids {
+                found: 1,
+                direction: Direction::Vertical
+            })
+        );
+        let pair = TactileMap::from_fn(|row, col| {
+            if row == 1 && (2..=3).contains(&col) {
+                0.5
+            } else {
+                0.0
+            }
+        });
+        let fit = fit_wire(&pair, &config()).unwrap();
+        assert_eq!((fit.h_v, fit.v_v), (0.0, 0.0));
+        assert_eq!(fit.direction, Direction::Horizontal);
+        assert_relative_eq!(fit.line.alpha_rad, 0.0);
+        assert_relative_eq!(fit.line.offset_mm, PITCH);
+        assert_eq!(fit.quadratic, None);
+    }
+
+    /// Clipping the hardest-pressed taxels of an offset cable weighs the
+    /// cable's own row too little: the centroids move towards the other
+    /// neighbours, here towards the centre.
+    #[test]
+    fn saturated_taxels_are_counted_and_pull_the_centroids() {
+        let truth = line_at(0.0, 0.8 * PITCH);
+        let map = render_line(truth, 2.0);
+        let mut clipped = map;
+        for (dv, saturated) in clipped
+            .dv_v
+            .iter_mut()
+            .flatten()
+            .zip(clipped.saturated.iter_mut().flatten())
+        {
+            if *dv > 1.5 {
+                *dv = 1.5;
+                *saturated = true;
+            }
+        }
+        let fit = fit_wire(&map, &config()).unwrap();
+        let clipped_fit = fit_wire(&clipped, &config()).unwrap();
+        assert_eq!(clipped_fit.saturated_taxels, 5);
+        assert_eq!(clipped_fit.peak_dv_v, 1.5);
+        assert!(clipped_fit.line.offset_mm < fit.line.offset_mm);
+        assert_relative_eq!(clipped_fit.line.alpha_rad, 0.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn negative_taxels_weigh_nothing() {
+        let map = render_line(line_at(0.2, 1.0), 1.0);
+        let mut with_negatives = map;
+        // The bottom row reads below its offset, e.g. the cap lifted there.
+        for dv in &mut with_negatives.dv_v[4] {
+            *dv = -0.3;
+        }
+        let mut zeroed = map;
+        zeroed.dv_v[4] = [0.0; TAXEL_COLS];
+        let fit = fit_wire(&with_negatives, &config()).unwrap();
+        assert_eq!(fit.negative_taxels, 5);
+        let reference = fit_wire(&zeroed, &config()).unwrap();
+        assert_eq!(fit.line, reference.line);
+        assert_eq!(fit.centroids, reference.centroids);
+        assert_eq!(reference.negative_taxels, 0);
+    }
+
+    #[test]
+    fn non_finite_taxels_weigh_nothing() {
+        let map = render_line(line_at(0.0, 0.0), 1.0);
+        let mut broken = map;
+        broken.dv_v[0][0] = f64::NAN;
+        broken.dv_v[4][4] = f64::INFINITY;
+        let fit = fit_wire(&broken, &config()).unwrap();
+        assert_eq!(fit.non_finite_taxels, 2);
+        assert!(fit.line.alpha_rad.is_finite() && fit.line.offset_mm.is_finite());
+        assert_relative_eq!(fit.peak_dv_v, 1.0);
+    }
+
+    /// Weights are divided by their peak before any sum, so a map scaled
+    /// to the ends of f64 fits the same line.
+    #[test]
+    fn extreme_voltages_stay_finite() {
+        let zero_threshold = FitConfig {
+            contact_threshold_v: 0.0,
+            ..config()
+        };
+        let map = render_line(line_at(0.3, 1.0), 1.0);
+        let reference = fit_wire(&map, &zero_threshold).unwrap();
+        for scale in [1e-300, 1e300, f64::MAX] {
+            let scaled = TactileMap::from_fn(|row, col| map.dv_v[row][col] * scale);
+            let fit = fit_wire(&scaled, &zero_threshold).unwrap();
+            assert!(fit.h_v.is_finite() && fit.v_v.is_finite());
+            let (d_alpha, d_offset) = line_error(&fit.line, &reference.line);
+            assert!(
+                d_alpha < 1e-9 && d_offset < 1e-9,
+                "{scale}: {d_alpha} {d_offset}"
+            );
+        }
+    }
+
+    #[test]
+    fn unphysical_config_is_refused() {
+        let map = render_line(line_at(0.0, 0.0), 1.0);
+        for (pitch_mm, contact_threshold_v) in [
+            (0.0, 0.05),
+            (-3.55, 0.05),
+            (f64::NAN, 0.05),
+            (3.55, -0.1),
+            (3.55, f64::INFINITY),
+        ] {
+            let config = FitConfig {
+                pitch_mm,
+                contact_threshold_v,
+            };
+            assert!(matches!(
+                fit_wire(&map, &config),
+                Err(FitError::InvalidConfig { .. })
+            ));
         }
     }
 }

@@ -358,7 +358,8 @@ impl<'t, 'a> JsonParser<'t, 'a> {
                     rows += 1;
                 }
                 (_, Some(true)) => return Err(token.syntax_error("`[` opening a row")),
-                (_, _) => return Err(token.syntax_error("a number")),
+                (_, Some(false)) => return Err(token.syntax_error("a number")),
+                (_, None) => return Err(token.syntax_error("a number or `[`")),
             }
             first = false;
             if !self.more_elements()? {
@@ -386,5 +387,199 @@ impl<'t, 'a> JsonParser<'t, 'a> {
                 return Ok(());
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp() -> Vec<f64> {
+        (0..TAXEL_COUNT).map(|k| k as f64 * 0.1 - 1.0).collect()
+    }
+
+    fn assert_ramp(map: &TactileMap) {
+        let expected = TactileMap::from_row_major(&ramp()).unwrap();
+        assert_eq!(map, &expected);
+        // Row-major: c12 is the second value, c21 the sixth.
+        assert_eq!(map.dv_v[0][1], -0.9);
+        assert_eq!(map.dv_v[1][0], ramp()[5]);
+    }
+
+    #[test]
+    fn raw_to_volts_scales_and_masks_the_high_nibble() {
+        assert_eq!(raw_to_volts(0), 0.0);
+        assert_eq!(raw_to_volts(2048), 1.65);
+        assert_eq!(raw_to_volts(ADC_MAX), 4095.0 * 3.3 / 4096.0);
+        assert_eq!(raw_to_volts(0xF000 | 0x0123), raw_to_volts(0x0123));
+        assert_eq!(raw_to_volts(0x1000), 0.0);
+    }
+
+    #[test]
+    fn taxel_coordinates_follow_the_paper() {
+        // c11 at top left, c35 on the +x side, c13 on the +y side.
+        assert_eq!((taxel_x_mm(0, 3.55), taxel_y_mm(0, 3.55)), (-7.1, 7.1));
+        assert_eq!((taxel_x_mm(4, 3.55), taxel_y_mm(2, 3.55)), (7.1, 0.0));
+        assert_eq!((taxel_x_mm(2, 3.55), taxel_y_mm(0, 3.55)), (0.0, 7.1));
+    }
+
+    #[test]
+    fn from_row_major_checks_count_and_finiteness() {
+        assert_ramp(&TactileMap::from_row_major(&ramp()).unwrap());
+        assert_eq!(
+            TactileMap::from_row_major(&ramp()[..24]),
+            Err(MapError::WrongCount { found: 24 })
+        );
+        let mut values = ramp();
+        values[7] = f64::NAN;
+        assert!(matches!(
+            TactileMap::from_row_major(&values),
+            Err(MapError::NotFinite { index: 7, .. })
+        ));
+    }
+
+    fn text(values: &[f64], separator: &str, per_line: usize) -> String {
+        values
+            .chunks(per_line)
+            .map(|line| {
+                line.iter()
+                    .map(f64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(separator)
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    #[test]
+    fn parses_flat_and_nested_json() {
+        let flat = serde_json::to_string(&ramp()).unwrap();
+        assert_ramp(&TactileMap::parse(&flat).unwrap());
+        let rows: Vec<Vec<f64>> = ramp().chunks(TAXEL_COLS).map(<[f64]>::to_vec).collect();
+        let nested = serde_json::to_string_pretty(&rows).unwrap();
+        assert_ramp(&TactileMap::parse(&nested).unwrap());
+    }
+
+    #[test]
+    fn parses_whitespace_and_comma_separated() {
+        assert_ramp(&TactileMap::parse(&text(&ramp(), " ", 5)).unwrap());
+        assert_ramp(&TactileMap::parse(&text(&ramp(), "\t", 25)).unwrap());
+        assert_ramp(&TactileMap::parse(&text(&ramp(), ", ", 5)).unwrap());
+        assert_ramp(&TactileMap::parse(&format!("  {}\n", text(&ramp(), ",", 7))).unwrap());
+    }
+
+    #[test]
+    fn wrong_count_says_how_many() {
+        let short = text(&ramp()[..24], " ", 5);
+        assert_eq!(
+            TactileMap::parse(&short),
+            Err(MapError::WrongCount { found: 24 })
+        );
+        let mut long = ramp();
+        long.push(0.0);
+        let long_json = serde_json::to_string(&long).unwrap();
+        let err = TactileMap::parse(&long_json).unwrap_err();
+        assert_eq!(err, MapError::WrongCount { found: 26 });
+        assert_eq!(err.to_string(), "a tactile map needs 25 values, found 26");
+        assert_eq!(
+            TactileMap::parse(""),
+            Err(MapError::WrongCount { found: 0 })
+        );
+        assert_eq!(
+            TactileMap::parse("[]"),
+            Err(MapError::WrongCount { found: 0 })
+        );
+    }
+
+    #[test]
+    fn bad_token_is_named_with_its_place() {
+        let err = TactileMap::parse("0 0 0 0 0\n0 0 x 0 0\n").unwrap_err();
+        assert_eq!(
+            err,
+            MapError::BadToken {
+                index: 7,
+                token: "x".into(),
+                line: 2,
+                column: 5
+            }
+        );
+        assert!(
+            err.to_string()
+                .starts_with("line 2, column 5: `x` (value 7")
+        );
+        // Non-finite spellings that Rust would parse are refused too.
+        let err = TactileMap::parse("[1, 2,\n  inf]").unwrap_err();
+        assert!(matches!(
+            err,
+            MapError::BadToken {
+                index: 2,
+                line: 2,
+                column: 3,
+                ..
+            }
+        ));
+        // Columns count characters, not bytes.
+        let err = TactileMap::parse("Δ 1").unwrap_err();
+        assert!(matches!(
+            err,
+            MapError::BadToken {
+                index: 0,
+                line: 1,
+                column: 1,
+                ..
+            }
+        ));
+        let err = TactileMap::parse("1 Δv").unwrap_err();
+        assert!(matches!(
+            err,
+            MapError::BadToken {
+                index: 1,
+                column: 3,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn broken_json_is_a_syntax_error_with_its_place() {
+        let syntax = |text: &str| match TactileMap::parse(text) {
+            Err(MapError::Syntax {
+                expected,
+                line,
+                column,
+                ..
+            }) => (expected, line, column),
+            other => panic!("{text}: {other:?}"),
+        };
+        assert_eq!(syntax("[1, 2 3]"), ("`,` or `]`", 1, 7));
+        assert_eq!(syntax("[1, 2,\n"), ("a number, `[` or `]`", 2, 1));
+        assert_eq!(syntax("[1, [2]]"), ("a number", 1, 5));
+        assert_eq!(syntax("[[1,2,3,4,5], 2]"), ("`[` opening a row", 1, 15));
+        assert_eq!(syntax("[,1]"), ("a number or `[`", 1, 2));
+        assert_eq!(syntax("[[[1]]]"), ("a number", 1, 3));
+        assert_eq!(syntax("[1] 2"), ("end of text", 1, 5));
+        assert_eq!(syntax("1 2 ]"), ("a number", 1, 5));
+    }
+
+    #[test]
+    fn nested_rows_must_hold_five() {
+        let rows = "[[1,2,3,4,5],[1,2,3,4,5],\n [1,2,3,4],[1,2,3,4,5,6],[1,2,3,4,5]]";
+        assert_eq!(
+            TactileMap::parse(rows),
+            Err(MapError::BadRow {
+                row: 2,
+                found: 4,
+                line: 2,
+                column: 2
+            })
+        );
+    }
+
+    #[test]
+    fn peak_ignores_nan() {
+        let mut map = TactileMap::from_row_major(&ramp()).unwrap();
+        assert_eq!(map.peak_dv_v(), ramp()[24]);
+        map.dv_v[4][4] = f64::NAN;
+        assert_eq!(map.peak_dv_v(), ramp()[23]);
     }
 }
