@@ -62,8 +62,7 @@ impl Cell {
         let detector: Box<dyn CableDetector> = match &file.detector.backend {
             DetectorBackend::Oracle(oracle) => Box::new(OracleDetector::new(
                 world.clone(),
-                oracle.position_noise_mm,
-                oracle.angle_noise_rad,
+                oracle.clone(),
                 rng(seed, Stream::Detector),
             )),
         };

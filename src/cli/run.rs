@@ -75,7 +75,10 @@ fn print_grasp(grasp: &GraspRecord) {
     match (&grasp.fit, &grasp.estimated_error) {
         (Some(fit), Some(error)) => println!(
             "{name:>13}  estimate n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
-            fit.line.offset_mm, fit.line.alpha_rad, error.n_mm, error.alpha_rad
+            fit.line().offset_mm,
+            fit.line().alpha_rad,
+            error.n_mm,
+            error.alpha_rad
         ),
         _ => println!(
             "{name:>13}  no estimate (peak Δv {:.3} V)",

@@ -24,7 +24,7 @@ use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecor
 use crate::geometry::{planar_to_spatial, t_corr};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
-use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame, fit_wire};
+use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
 
 /// What the machine shares with the runner.
 #[derive(Debug)]
@@ -308,11 +308,11 @@ impl GraspTask {
         let Some(map) = self.bias.as_ref().and_then(|bias| bias.remove_mean(&raw)) else {
             return fault(context, None, "no tactile frames to evaluate".into());
         };
-        let fit = fit_wire(&map, &self.plan.fit);
+        let fit = self.plan.estimator.estimate(&map, &self.plan.fit);
         let estimated_error = fit
             .as_ref()
             .ok()
-            .map(|fit| fit.line.error_to(&self.plan.target));
+            .map(|fit| fit.line().error_to(&self.plan.target));
         context.record.grasps.push(GraspRecord {
             attempt,
             t_s: context.now_s,
@@ -332,12 +332,13 @@ impl GraspTask {
                 return fail(context, Failure::FitFailed { attempt, error });
             }
         };
-        let error = fit.line.error_to(&self.plan.target);
+        let line = fit.line();
+        let error = line.error_to(&self.plan.target);
         if error.within(&self.plan.tolerance) {
             context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
             Transition(State::done())
         } else if attempt < self.plan.max_regrasps {
-            let sensor_old_from_new = t_corr(&fit.line, &self.plan.target);
+            let sensor_old_from_new = t_corr(&line, &self.plan.target);
             self.base_from_tcp_aim = self.base_from_tcp_grasped
                 * self.plan.tcp_from_sensor
                 * sensor_old_from_new
@@ -418,7 +419,7 @@ mod tests {
     use crate::geometry::{LineInSensor, PoseError};
     use crate::hw::detector::CableDetection;
     use crate::hw::{DeviceError, DeviceKind};
-    use crate::perception::tactile::FitConfig;
+    use crate::perception::tactile::{Estimator, FitConfig};
     use crate::sim::tactile_model::TactileModel;
     use crate::sim::{Stream, rng};
     use crate::task::cell_file::SimTactileConfig;
@@ -442,6 +443,7 @@ mod tests {
                 pitch_mm: 3.55,
                 contact_threshold_v: 0.05,
             },
+            estimator: Estimator::Centroids,
             tcp_from_sensor: Isometry3::from_parts(
                 Translation3::new(0.0, 0.0, -10.0),
                 UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),

@@ -3,7 +3,7 @@
 use nalgebra::Isometry3;
 
 use crate::geometry::{LineInSensor, PoseError};
-use crate::perception::tactile::FitConfig;
+use crate::perception::tactile::{Estimator, FitConfig};
 use crate::task::{CellFile, TaskFile};
 
 #[derive(Debug, Clone)]
@@ -19,6 +19,7 @@ pub struct Plan {
     pub bias_frames: usize,
     pub average_frames: usize,
     pub fit: FitConfig,
+    pub estimator: Estimator,
     /// Where the pad sits on the hand.
     pub tcp_from_sensor: Isometry3<f64>,
 }
@@ -40,6 +41,7 @@ impl Plan {
                 pitch_mm: cell.tactile.pitch_mm,
                 contact_threshold_v: task.tactile.contact_threshold_v,
             },
+            estimator: task.tactile.estimator,
             tcp_from_sensor: cell.tactile.tcp_from_sensor.isometry(),
         }
     }

@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::geometry::{LineInSensor, PoseError};
 use crate::hw::DeviceKind;
-use crate::perception::tactile::{TactileMap, WireFit};
+use crate::perception::tactile::{Estimate, TactileMap};
 
 #[derive(Debug, Clone, Serialize)]
 pub struct RunRecord {
@@ -94,7 +94,7 @@ pub struct GraspRecord {
     /// Mean Δv over the evaluated frames.
     pub map: TactileMap,
     /// The cable as the pad estimates it; `None` if the fit failed.
-    pub fit: Option<WireFit>,
+    pub fit: Option<Estimate>,
     /// The estimate against the target.
     pub estimated_error: Option<PoseError>,
     /// Where the cable really lay, when the cell knows (a simulation).

@@ -89,7 +89,7 @@ impl Runner {
         grasp.truth = Some(Truth {
             line,
             error: line.error_to(&target),
-            estimate_error: grasp.fit.as_ref().map(|fit| fit.line.error_to(&line)),
+            estimate_error: grasp.fit.as_ref().map(|fit| fit.line().error_to(&line)),
         });
     }
 }

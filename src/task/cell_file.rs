@@ -4,7 +4,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use serde::Deserialize;
 
-use super::validate::{fraction, non_negative, positive, vector3, voltage_range};
+use super::validate::{finite, fraction, non_negative, positive, vector3, voltage_range};
 
 /// A cell file, e.g. `config/cell.sim.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -143,6 +143,13 @@ pub struct OracleConfig {
     /// σ of the cable direction's error about the pad's normal.
     #[serde(deserialize_with = "non_negative")]
     pub angle_noise_rad: f64,
+    /// A fixed error across the cable added to every detection: a
+    /// campaign sets each trial's start offset with it.
+    #[serde(default, deserialize_with = "finite")]
+    pub offset_across_mm: f64,
+    /// A fixed error of the cable's direction, likewise.
+    #[serde(default, deserialize_with = "finite")]
+    pub offset_angle_rad: f64,
 }
 
 /// The simulated scene: one straight cable held between two supports.

@@ -9,7 +9,7 @@
 pub mod cell_file;
 pub mod load;
 pub mod task_file;
-mod validate;
+pub(crate) mod validate;
 
 pub use cell_file::CellFile;
 pub use load::{ConfigError, FileKind, check_file, load_cell, load_task};

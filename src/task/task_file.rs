@@ -4,6 +4,7 @@ use serde::Deserialize;
 
 use super::validate::{at_least_one, finite, line_angle, positive};
 use crate::geometry::{LineInSensor, PoseError};
+use crate::perception::tactile::Estimator;
 
 /// A task file, e.g. `tasks/regrasp.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -111,4 +112,6 @@ pub struct TactileEvaluation {
     /// Peak Δv below which the pad is taken to touch nothing.
     #[serde(deserialize_with = "positive")]
     pub contact_threshold_v: f64,
+    /// `centroids` (the paper's) or `ridge` (cablecell's).
+    pub estimator: Estimator,
 }

@@ -94,3 +94,15 @@ pub fn voltage_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Err
         )))
     }
 }
+
+/// A range `[low, high]` of numbers with 0 ≤ low ≤ high.
+pub fn non_negative_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    let [low, high] = <[f64; 2]>::deserialize(d)?;
+    if low >= 0.0 && low <= high && high.is_finite() {
+        Ok([low, high])
+    } else {
+        Err(D::Error::custom(format!(
+            "expected [low, high] with 0 ≤ low ≤ high, found [{low}, {high}]"
+        )))
+    }
+}

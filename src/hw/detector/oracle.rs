@@ -10,34 +10,27 @@ use rand_distr::StandardNormal;
 use super::{CableDetection, CableDetector};
 use crate::hw::DeviceError;
 use crate::sim::world::{SharedWorld, lock};
+use crate::task::cell_file::OracleConfig;
 
 pub struct OracleDetector {
     world: SharedWorld,
-    position_noise_mm: f64,
-    angle_noise_rad: f64,
+    config: OracleConfig,
     rng: ChaCha8Rng,
 }
 
 impl OracleDetector {
-    pub fn new(
-        world: SharedWorld,
-        position_noise_mm: f64,
-        angle_noise_rad: f64,
-        rng: ChaCha8Rng,
-    ) -> Self {
-        Self {
-            world,
-            position_noise_mm,
-            angle_noise_rad,
-            rng,
-        }
+    pub fn new(world: SharedWorld, config: OracleConfig, rng: ChaCha8Rng) -> Self {
+        Self { world, config, rng }
     }
 }
 
 impl CableDetector for OracleDetector {
     fn detect(&mut self) -> Result<Vec<CableDetection>, DeviceError> {
-        let across_mm = self.position_noise_mm * self.rng.sample::<f64, _>(StandardNormal);
-        let turn_rad = self.angle_noise_rad * self.rng.sample::<f64, _>(StandardNormal);
+        let config = &self.config;
+        let across_mm = config.offset_across_mm
+            + config.position_noise_mm * self.rng.sample::<f64, _>(StandardNormal);
+        let turn_rad = config.offset_angle_rad
+            + config.angle_noise_rad * self.rng.sample::<f64, _>(StandardNormal);
         let cable_from_detected = Isometry3::from_parts(
             Translation3::new(0.0, across_mm, 0.0),
             UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn_rad),

@@ -10,10 +10,12 @@
 //! origin at the centre of c33, x towards c35, y towards c13.
 
 pub mod bias;
+pub mod estimator;
 pub mod fit;
 pub mod map;
 
 pub use bias::{Bias, BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame};
+pub use estimator::{Estimate, Estimator};
 pub use fit::{
     Centroid, Direction, FitConfig, FitError, PAPER_PITCH_MM, Quadratic, WireFit, fit_wire,
 };
