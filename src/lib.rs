@@ -1,6 +1,7 @@
 //! cablecell: a robot task orchestrator for a vision- and tactile-guided
 //! cable-grasping cell. ARCHITECTURE.md maps the parts.
 
+pub mod campaign;
 pub mod cell;
 pub mod geometry;
 pub mod hw;

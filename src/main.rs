@@ -12,7 +12,8 @@ use clap::{Parser, Subcommand};
 ///
 /// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
 /// the allowed regrasps, no cable on the pad); 2 bad input (command line,
-/// task, cell or map file); 3 device fault (the cell was made safe).
+/// task, cell, campaign or map file); 3 device fault (the cell was made
+/// safe); 4 the output (a campaign's journal) could not be written or read.
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Args {
@@ -37,7 +38,32 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Validate task and cell files without running them.
+    /// Run a campaign: many seeded trials of a task, each policy of the file
+    /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
+    /// summarised side by side.
+    Campaign {
+        /// The campaign file, e.g. tasks/paper-regrasp-campaign.toml.
+        file: PathBuf,
+        /// Trials per policy (default: the file's).
+        #[arg(long)]
+        trials: Option<usize>,
+        /// The campaign's seed (default: the file's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Output folder (default: the file's).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Continue the campaign recorded in the output folder.
+        #[arg(long)]
+        resume: bool,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Worker threads (default: one per core). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Validate task, cell and campaign files without running them.
     Check {
         #[arg(required = true)]
         files: Vec<PathBuf>,
@@ -69,6 +95,21 @@ fn main() -> ExitCode {
             seed,
             json,
         } => cli::run::run(&task, &cell, seed, json),
+        Command::Campaign {
+            file,
+            trials,
+            seed,
+            out,
+            resume,
+            json,
+            threads,
+        } => {
+            let overrides = cablecell::campaign::run::Overrides { trials, seed, out };
+            let threads = threads.unwrap_or_else(|| {
+                std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+            });
+            cli::campaign::campaign(&file, overrides, resume, json, threads)
+        }
         Command::Check { files } => cli::check::check(&files),
         Command::TactileFit {
             file,

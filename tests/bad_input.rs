@@ -140,10 +140,10 @@ fn unknown_backend_lists_the_known_ones() {
 fn a_file_that_is_neither_task_nor_cell_is_named_as_such() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("other.toml");
-    std::fs::write(&path, "[campaign]\nname = \"x\"\n").expect("write");
+    std::fs::write(&path, "[robot]\nname = \"x\"\n").expect("write");
     let out = cablecell(&["check", path.to_str().expect("utf-8")]);
     assert_eq!(out.status.code(), Some(BAD_INPUT));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not a task or cell file"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a task, cell or campaign file"));
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The subcommands, each in its own file; `Status` is the exit status
 //! they share.
 
+pub mod campaign;
 pub mod check;
 pub mod run;
 pub mod tactile_fit;
@@ -14,6 +15,7 @@ pub enum Status {
     TaskFailed = 1,
     BadInput = 2,
     DeviceFault = 3,
+    OutputFailed = 4,
 }
 
 impl From<Status> for ExitCode {

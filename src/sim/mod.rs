@@ -17,6 +17,8 @@ pub enum Stream {
     Tactile = 2,
     TactileCalibration = 3,
     Detector = 4,
+    /// A campaign trial's perturbation.
+    Perturbation = 5,
 }
 
 /// The random stream `stream` of a cell seeded with `seed`.

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::{CellFile, TaskFile};
+use super::{CampaignFile, CellFile, TaskFile};
 
 /// Why a task or cell file could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -28,9 +28,9 @@ pub enum ConfigError {
         field: String,
         message: String,
     },
-    /// The file has neither a `[task]` nor a `[cell]` table, so it is not
-    /// known what to check it against.
-    #[error("{}: not a task or cell file: expected a [task] or [cell] table at the top", path.display())]
+    /// The file has no `[task]`, `[cell]` or `[campaign]` table, so it is
+    /// not known what to check it against.
+    #[error("{}: not a task, cell or campaign file: expected a [task], [cell] or [campaign] table", path.display())]
     UnknownKind { path: PathBuf },
 }
 
@@ -39,6 +39,7 @@ pub enum ConfigError {
 pub enum FileKind {
     Task,
     Cell,
+    Campaign,
 }
 
 impl std::fmt::Display for FileKind {
@@ -46,6 +47,7 @@ impl std::fmt::Display for FileKind {
         f.write_str(match self {
             FileKind::Task => "task file",
             FileKind::Cell => "cell file",
+            FileKind::Campaign => "campaign file",
         })
     }
 }
@@ -58,7 +60,7 @@ pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
     parse(path, &read(path)?)
 }
 
-/// Validates a task or cell file, telling which by its top table.
+/// Validates a task, cell or campaign file, telling which by its top table.
 pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
     let text = read(path)?;
     let table: toml::Table = parse(path, &text)?;
@@ -66,6 +68,8 @@ pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
         parse::<TaskFile>(path, &text).map(|_| FileKind::Task)
     } else if table.contains_key("cell") {
         parse::<CellFile>(path, &text).map(|_| FileKind::Cell)
+    } else if table.contains_key("campaign") {
+        parse::<CampaignFile>(path, &text).map(|_| FileKind::Campaign)
     } else {
         Err(ConfigError::UnknownKind {
             path: path.to_owned(),

@@ -1,16 +1,19 @@
-//! Task and cell files: their schemas, and loading that names the file,
-//! line, column and field of every error.
+//! Task, cell and campaign files: their schemas, and loading that names
+//! the file, line, column and field of every error.
 //!
 //! A task file says what to do (target pose, tolerance, how many regrasps);
 //! a cell file says with what (which backend each device uses, its limits
-//! and calibration). Each begins with its own table, `[task]` or `[cell]`,
-//! so that `cablecell check` can tell them apart.
+//! and calibration); a campaign file runs a task many times. Each begins
+//! with its own table, `[task]`, `[cell]` or `[campaign]`, so that
+//! `cablecell check` can tell them apart.
 
+pub mod campaign_file;
 pub mod cell_file;
 pub mod load;
 pub mod task_file;
 pub(crate) mod validate;
 
+pub use campaign_file::CampaignFile;
 pub use cell_file::CellFile;
 pub use load::{ConfigError, FileKind, check_file, load_cell, load_task};
 pub use task_file::TaskFile;

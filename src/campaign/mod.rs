@@ -1,0 +1,9 @@
+//! Campaigns: many seeded trials of a task, each policy of the campaign
+//! file on identical trials, recorded as they finish (`journal`), and
+//! summarised (`stats`, `summary`).
+
+pub mod journal;
+pub mod run;
+pub mod stats;
+pub mod summary;
+pub mod trial;

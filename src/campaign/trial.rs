@@ -1,0 +1,163 @@
+//! One trial of a campaign: its seed, the perturbation drawn from it, and
+//! what the run gave, as written to the campaign's journal.
+
+use std::time::Instant;
+
+use rand::RngExt;
+use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{LineInSensor, PoseError};
+use crate::orchestrator::{RunOutcome, Runner};
+use crate::sim::{Stream, rng};
+use crate::task::campaign_file::{Perturbations, Policy};
+use crate::task::cell_file::{DetectorBackend, TactileBackend};
+use crate::task::{CellFile, TaskFile};
+
+/// The seed of trial `index`: the same for every policy, and independent
+/// of the order and the thread the trials run in.
+pub fn trial_seed(campaign_seed: u64, index: usize) -> u64 {
+    // SplitMix64 of the pair: neighbouring trials get unrelated streams.
+    let mut z = campaign_seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The values one trial runs with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Perturbation {
+    pub start_offset_mm: f64,
+    pub start_angle_rad: f64,
+    pub cable_diameter_mm: f64,
+    pub sensor_noise_fraction: f64,
+}
+
+impl Perturbation {
+    pub fn draw(ranges: &Perturbations, seed: u64) -> Self {
+        let mut rng = rng(seed, Stream::Perturbation);
+        let uniform = |rng: &mut rand_chacha::ChaCha8Rng, [low, high]: [f64; 2]| {
+            if high > low {
+                rng.random_range(low..=high)
+            } else {
+                low
+            }
+        };
+        Self {
+            start_offset_mm: ranges.start_offset_mm * rng.sample::<f64, _>(StandardNormal),
+            start_angle_rad: ranges.start_angle_rad * rng.sample::<f64, _>(StandardNormal),
+            cable_diameter_mm: uniform(&mut rng, ranges.cable_diameter_mm),
+            sensor_noise_fraction: uniform(&mut rng, ranges.sensor_noise_fraction),
+        }
+    }
+
+    /// The cell of this trial: the base cell with these values set.
+    pub fn apply(&self, cell: &CellFile) -> CellFile {
+        let mut cell = cell.clone();
+        let DetectorBackend::Oracle(oracle) = &mut cell.detector.backend;
+        oracle.offset_across_mm = self.start_offset_mm;
+        oracle.offset_angle_rad = self.start_angle_rad;
+        oracle.position_noise_mm = 0.0;
+        oracle.angle_noise_rad = 0.0;
+        let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
+        tactile.noise_fraction = self.sensor_noise_fraction;
+        cell.world.cable_diameter_mm = self.cable_diameter_mm;
+        cell
+    }
+}
+
+/// A trial as the journal keeps it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialEntry {
+    pub campaign_seed: u64,
+    pub trial: usize,
+    pub policy: String,
+    pub seed: u64,
+    pub perturbation: Perturbation,
+    pub outcome: TrialOutcome,
+    /// Why the trial failed or faulted.
+    pub detail: Option<String>,
+    /// The trial grasp, then each regrasp.
+    pub grasps: Vec<GraspResult>,
+    /// Time spent in each state, in order, on the cell's clock.
+    pub states: Vec<(String, f64)>,
+    /// The trial's duration on the cell's clock (simulated time).
+    pub cell_time_s: f64,
+    /// Computation time of the trial (not reproducible: wall clock).
+    pub compute_time_s: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrialOutcome {
+    Success,
+    Failed,
+    Fault,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GraspResult {
+    pub estimate: Option<LineInSensor>,
+    pub truth: Option<LineInSensor>,
+    /// The true pose against the target.
+    pub error: Option<PoseError>,
+    /// The estimate against the true pose.
+    pub estimate_error: Option<PoseError>,
+}
+
+/// Runs trial `index` of a campaign with one policy.
+pub fn run_trial(
+    task: &TaskFile,
+    cell: &CellFile,
+    policy: &Policy,
+    ranges: &Perturbations,
+    campaign_seed: u64,
+    index: usize,
+) -> TrialEntry {
+    let started = Instant::now();
+    let seed = trial_seed(campaign_seed, index);
+    let perturbation = Perturbation::draw(ranges, seed);
+    let mut task = task.clone();
+    task.tactile.estimator = policy.estimator;
+    task.regrasp.max_regrasps = policy.max_regrasps;
+    let mut runner = Runner::for_task(&task, &perturbation.apply(cell), seed);
+    runner.run_to_end();
+    let record = runner.into_record();
+    let (outcome, detail) = match &record.outcome {
+        Some(RunOutcome::Success { .. }) => (TrialOutcome::Success, None),
+        Some(RunOutcome::Failed { reason }) => (TrialOutcome::Failed, Some(reason.to_string())),
+        Some(RunOutcome::Fault { error, .. }) => (TrialOutcome::Fault, Some(error.clone())),
+        None => (
+            TrialOutcome::Fault,
+            Some("the run stopped before it ended".into()),
+        ),
+    };
+    let grasps = record
+        .grasps
+        .iter()
+        .map(|grasp| GraspResult {
+            estimate: grasp.fit.as_ref().map(|fit| fit.line()),
+            truth: grasp.truth.as_ref().map(|truth| truth.line),
+            error: grasp.truth.as_ref().map(|truth| truth.error),
+            estimate_error: grasp.truth.as_ref().and_then(|truth| truth.estimate_error),
+        })
+        .collect();
+    let states = record
+        .state_timings()
+        .iter()
+        .filter_map(|t| t.duration_s.map(|d| (t.state.to_owned(), d)))
+        .collect();
+    TrialEntry {
+        campaign_seed,
+        trial: index,
+        policy: policy.name.clone(),
+        seed,
+        perturbation,
+        outcome,
+        detail,
+        grasps,
+        states,
+        cell_time_s: record.transitions.last().map_or(0.0, |t| t.t_s),
+        compute_time_s: started.elapsed().as_secs_f64(),
+    }
+}

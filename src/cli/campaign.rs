@@ -1,0 +1,109 @@
+//! `cablecell campaign FILE`
+
+use std::path::Path;
+
+use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
+use cablecell::campaign::summary::{render_table, summarise};
+use cablecell::campaign::trial::TrialEntry;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::Status;
+
+pub fn campaign(
+    path: &Path,
+    overrides: Overrides,
+    resume: bool,
+    json: bool,
+    threads: usize,
+) -> Status {
+    let campaign = match Campaign::load(path, overrides) {
+        Ok(campaign) => campaign,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    let policies = campaign.policy_names();
+    let bar = ProgressBar::new((campaign.trials * policies.len()) as u64).with_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} trials {elapsed}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut means = RunningMeans::new(&policies);
+    let result = campaign.run(resume, threads, |entry| {
+        means.add(entry);
+        bar.set_message(means.to_string());
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let entries = match result {
+        Ok(entries) => entries,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return match error {
+                CampaignError::Config(_)
+                | CampaignError::Exists { .. }
+                | CampaignError::SeedMismatch { .. } => Status::BadInput,
+                _ => Status::OutputFailed,
+            };
+        }
+    };
+    let summary = summarise(
+        &campaign.file.campaign.name,
+        campaign.seed,
+        campaign.trials,
+        &policies,
+        &entries,
+    );
+    if json {
+        match serde_json::to_string_pretty(&summary) {
+            Ok(text) => println!("{text}"),
+            Err(error) => {
+                eprintln!("error: cannot write the summary as JSON: {error}");
+                return Status::OutputFailed;
+            }
+        }
+    } else {
+        print!("{}", render_table(&summary));
+        println!("trials recorded in {}", campaign.journal_path().display());
+    }
+    Status::Success
+}
+
+/// Mean final |n| and |α| per policy, for the progress bar.
+struct RunningMeans {
+    sums: Vec<(String, f64, f64, usize)>,
+}
+
+impl RunningMeans {
+    fn new(policies: &[String]) -> Self {
+        Self {
+            sums: policies.iter().map(|p| (p.clone(), 0.0, 0.0, 0)).collect(),
+        }
+    }
+
+    fn add(&mut self, entry: &TrialEntry) {
+        let error = entry.grasps.last().and_then(|g| g.error);
+        if let (Some(sum), Some(error)) =
+            (self.sums.iter_mut().find(|s| s.0 == entry.policy), error)
+        {
+            sum.1 += error.n_mm.abs();
+            sum.2 += error.alpha_rad.abs();
+            sum.3 += 1;
+        }
+    }
+}
+
+impl std::fmt::Display for RunningMeans {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (name, n, alpha, count) in self.sums.iter().filter(|s| s.3 > 0) {
+            let count = *count as f64;
+            write!(
+                f,
+                "{name}: |n| {:.2} mm |α| {:.3} rad  ",
+                n / count,
+                alpha / count
+            )?;
+        }
+        Ok(())
+    }
+}

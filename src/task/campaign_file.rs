@@ -1,0 +1,109 @@
+//! The campaign file: which task on which cell, how many trials, the
+//! seeded perturbations of each trial, and the policies to compare.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Deserializer, de::Error};
+
+use super::load::{ConfigError, parse, read};
+use super::validate::{at_least_one, non_negative, non_negative_range};
+use crate::perception::tactile::Estimator;
+
+/// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignFile {
+    pub campaign: CampaignSection,
+    pub perturbation: Perturbations,
+    /// The policies to run on identical trials, side by side.
+    #[serde(rename = "policy", deserialize_with = "policies")]
+    pub policies: Vec<Policy>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignSection {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// The task file, relative to the campaign file.
+    pub task: PathBuf,
+    /// The cell file, relative to the campaign file.
+    pub cell: PathBuf,
+    /// Trials per policy (the paper made 20).
+    #[serde(default = "paper_trials", deserialize_with = "at_least_one")]
+    pub trials: usize,
+    pub seed: u64,
+    /// Output folder, relative to the working directory.
+    pub out: PathBuf,
+}
+
+fn paper_trials() -> usize {
+    20
+}
+
+/// What varies from trial to trial; each trial draws its own values from
+/// its seed.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Perturbations {
+    /// σ of the start grasp frame's offset across the cable (the paper's
+    /// "small random offset on the initial reference frame").
+    #[serde(deserialize_with = "non_negative")]
+    pub start_offset_mm: f64,
+    /// σ of the start grasp frame's angle about the pad's normal.
+    #[serde(deserialize_with = "non_negative")]
+    pub start_angle_rad: f64,
+    /// Range of the cable's diameter, drawn uniformly.
+    #[serde(deserialize_with = "non_negative_range")]
+    pub cable_diameter_mm: [f64; 2],
+    /// Range of the tactile noise (fraction of the taxels' swing).
+    #[serde(deserialize_with = "non_negative_range")]
+    pub sensor_noise_fraction: [f64; 2],
+}
+
+/// An estimator and a regrasp budget.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Policy {
+    pub name: String,
+    pub estimator: Estimator,
+    /// Regrasps allowed; a policy stops regrasping once within tolerance.
+    pub max_regrasps: u32,
+}
+
+/// At least one policy, with distinct names.
+fn policies<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Policy>, D::Error> {
+    let policies = Vec::<Policy>::deserialize(d)?;
+    if policies.is_empty() {
+        return Err(D::Error::custom("expected at least one [[policy]]"));
+    }
+    for (i, policy) in policies.iter().enumerate() {
+        if policies[..i].iter().any(|p| p.name == policy.name) {
+            return Err(D::Error::custom(format!(
+                "policy name `{}` is used twice",
+                policy.name
+            )));
+        }
+    }
+    Ok(policies)
+}
+
+impl CampaignFile {
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        parse(path, &read(path)?)
+    }
+
+    /// The task file's path as the campaign file names it.
+    pub fn task_path(&self, campaign_path: &Path) -> PathBuf {
+        relative_to(campaign_path, &self.campaign.task)
+    }
+
+    pub fn cell_path(&self, campaign_path: &Path) -> PathBuf {
+        relative_to(campaign_path, &self.campaign.cell)
+    }
+}
+
+fn relative_to(file: &Path, path: &Path) -> PathBuf {
+    file.parent().unwrap_or(Path::new("")).join(path)
+}
