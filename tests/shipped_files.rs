@@ -16,13 +16,24 @@ fn toml_files(dir: &str) -> Vec<std::path::PathBuf> {
 }
 
 #[test]
-fn every_task_file_is_a_valid_task() {
-    let files = toml_files("tasks");
-    assert!(!files.is_empty());
-    for file in files {
-        match check_file(&file) {
-            Ok(kind) => assert_eq!(kind, FileKind::Task, "{}", file.display()),
-            Err(e) => panic!("{e}"),
+fn every_file_in_tasks_is_a_valid_task_or_campaign() {
+    let kinds: Vec<FileKind> = toml_files("tasks")
+        .iter()
+        .map(|file| check_file(file).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    assert!(kinds.contains(&FileKind::Task));
+    assert!(kinds.contains(&FileKind::Campaign));
+    assert!(kinds.iter().all(|k| matches!(k, FileKind::Task | FileKind::Campaign)));
+}
+
+#[test]
+fn every_campaign_names_a_task_and_cell_that_load() {
+    for file in toml_files("tasks") {
+        if check_file(&file).ok() == Some(FileKind::Campaign) {
+            let overrides = cablecell::campaign::run::Overrides::default();
+            if let Err(e) = cablecell::campaign::run::Campaign::load(&file, overrides) {
+                panic!("{e}");
+            }
         }
     }
 }
