@@ -133,7 +133,7 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
 /// The summary as a table, the policies side by side.
 pub fn render_table(summary: &CampaignSummary) -> String {
     const LABEL: usize = 24;
-    const CELL: usize = 40;
+    const CELL: usize = 44;
     let mut out = format!(
         "campaign {}: {} trials per policy, seed {}\n{:LABEL$}",
         summary.name, summary.trials, summary.seed, ""
@@ -213,5 +213,99 @@ fn cell(summary: Option<Summary>, scale: f64, digits: usize) -> String {
             d = digits
         ),
         None => "—".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::trial::{GraspResult, Perturbation};
+    use approx::assert_relative_eq;
+
+    fn entry(trial: usize, errors_n_mm: &[f64], outcome: TrialOutcome) -> TrialEntry {
+        TrialEntry {
+            campaign_seed: 1,
+            trial,
+            policy: "p".into(),
+            seed: trial as u64,
+            perturbation: Perturbation {
+                start_offset_mm: 0.0,
+                start_angle_rad: 0.0,
+                cable_diameter_mm: 2.5,
+                sensor_noise_fraction: 0.02,
+            },
+            outcome,
+            detail: None,
+            grasps: errors_n_mm
+                .iter()
+                .map(|&n_mm| GraspResult {
+                    estimate: None,
+                    truth: None,
+                    error: Some(PoseError {
+                        n_mm,
+                        alpha_rad: -n_mm / 10.0,
+                    }),
+                    estimate_error: None,
+                })
+                .collect(),
+            states: Vec::new(),
+            cell_time_s: 4.0 + trial as f64,
+            compute_time_s: 0.001,
+        }
+    }
+
+    #[test]
+    fn a_hand_computed_campaign() {
+        let entries = [
+            entry(0, &[1.0, 0.2], TrialOutcome::Success),
+            entry(1, &[-2.0], TrialOutcome::Failed),
+            entry(2, &[6.0, -0.4], TrialOutcome::Success),
+        ];
+        let summary = summarise("c", 1, 3, &["p".into(), "q".into()], &entries);
+        let p = &summary.policies[0];
+        assert_eq!(p.trials, 3);
+        // Trial grasp |n| = 1, 2, 6: mean 3; sd √((4 + 1 + 9) / 2) = √7;
+        // median 2; p95 at rank 0.95·2 = 1.9: 2 + 0.9·(6 − 2) = 5.6.
+        let trial = p.stages[0].n_mm.expect("trial grasp");
+        assert_eq!(p.stages[0].stage, "trial grasp");
+        assert_relative_eq!(trial.mean, 3.0);
+        assert_relative_eq!(trial.std_dev, 7.0_f64.sqrt());
+        assert_relative_eq!(trial.median, 2.0);
+        assert_relative_eq!(trial.p95, 5.6, epsilon = 1e-12);
+        assert_relative_eq!(trial.max, 6.0);
+        assert_relative_eq!(p.stages[0].alpha_rad.expect("α").mean, 0.3);
+        // Regrasp 1 only in trials 0 and 2: |n| 0.2, 0.4.
+        assert_eq!(p.stages[1].stage, "regrasp 1");
+        assert_eq!(p.stages[1].n_mm.expect("regrasp").count, 2);
+        assert_relative_eq!(
+            p.stages[1].n_mm.expect("regrasp").mean,
+            0.3,
+            epsilon = 1e-12
+        );
+        // Final: 0.2, 2, 0.4.
+        assert_eq!(p.stages[2].stage, "final");
+        assert_relative_eq!(
+            p.stages[2].n_mm.expect("final").mean,
+            2.6 / 3.0,
+            epsilon = 1e-12
+        );
+        let success = p.success.expect("rate");
+        assert_eq!((success.successes, success.trials), (2, 3));
+        assert_relative_eq!(
+            p.regrasps_per_trial.expect("regrasps").mean,
+            2.0 / 3.0,
+            epsilon = 1e-12
+        );
+        assert_relative_eq!(p.cell_time_per_trial_s.expect("time").mean, 5.0);
+        // A policy with no trials has no numbers, and the table says so.
+        let q = &summary.policies[1];
+        assert_eq!(q.trials, 0);
+        assert!(q.success.is_none());
+        let table = render_table(&summary);
+        assert!(
+            table.contains("trial grasp |n| mm      3.000 ± 2.646 (2.000, 5.600, 6.000)"),
+            "{table}"
+        );
+        assert!(table.contains("2/3 = 67 %"), "{table}");
     }
 }
