@@ -23,7 +23,11 @@ fn every_file_in_tasks_is_a_valid_task_or_campaign() {
         .collect();
     assert!(kinds.contains(&FileKind::Task));
     assert!(kinds.contains(&FileKind::Campaign));
-    assert!(kinds.iter().all(|k| matches!(k, FileKind::Task | FileKind::Campaign)));
+    assert!(
+        kinds
+            .iter()
+            .all(|k| matches!(k, FileKind::Task | FileKind::Campaign))
+    );
 }
 
 #[test]
