@@ -9,9 +9,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
 use crate::orchestrator::{RunOutcome, Runner};
+use crate::perception::tactile::Estimator;
 use crate::sim::{Stream, rng};
-use crate::task::campaign_file::{Perturbations, Policy};
-use crate::task::cell_file::{DetectorBackend, TactileBackend};
+use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
+use crate::task::cell_file::{ArmBackend, DetectorBackend, TactileBackend};
 use crate::task::{CellFile, TaskFile};
 
 /// The seed of trial `index`: the same for every policy, and independent
@@ -105,6 +106,27 @@ pub struct GraspResult {
     pub estimate_error: Option<PoseError>,
 }
 
+/// The task and cell as `policy` runs them.
+fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile, CellFile) {
+    let (mut task, mut cell) = (task.clone(), cell.clone());
+    task.tactile.estimator = policy.estimator;
+    task.regrasp.max_regrasps = policy.max_regrasps;
+    for source in &policy.perfect {
+        match source {
+            ErrorSource::Estimator => task.tactile.estimator = Estimator::Oracle,
+            ErrorSource::Arm => {
+                let ArmBackend::Sim(arm) = &mut cell.arm.backend;
+                arm.repeatability_mm = 0.0;
+            }
+            ErrorSource::SensorNoise => {
+                let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
+                tactile.noise_fraction = 0.0;
+            }
+        }
+    }
+    (task, cell)
+}
+
 /// Runs trial `index` of a campaign with one policy.
 pub fn run_trial(
     task: &TaskFile,
@@ -117,10 +139,8 @@ pub fn run_trial(
     let started = Instant::now();
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
-    let mut task = task.clone();
-    task.tactile.estimator = policy.estimator;
-    task.regrasp.max_regrasps = policy.max_regrasps;
-    let mut runner = Runner::for_task(&task, &perturbation.apply(cell), seed);
+    let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell));
+    let mut runner = Runner::for_task(&task, &cell, seed);
     runner.run_to_end();
     let record = runner.into_record();
     let (outcome, detail) = match &record.outcome {

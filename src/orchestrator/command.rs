@@ -2,6 +2,7 @@
 
 use nalgebra::Isometry3;
 
+use crate::geometry::LineInSensor;
 use crate::hw::DeviceError;
 use crate::hw::detector::CableDetection;
 use crate::hw::gripper::GripOutcome;
@@ -48,7 +49,12 @@ pub enum Command {
 pub enum Event {
     /// Begin the task.
     Start,
-    Tactile(Vec<TactileFrame>),
+    Tactile {
+        frames: Vec<TactileFrame>,
+        /// Where the cable really lies on the pad, when the cell knows (a
+        /// simulation): kept in the record beside the estimate.
+        true_line: Option<LineInSensor>,
+    },
     Detected(Vec<CableDetection>),
     Arrived,
     Grasped {

@@ -29,7 +29,7 @@ pub fn execute(cell: &mut Cell, command: &Command) -> Event {
             speed_mm_s,
             grip_current_a,
         } => grasp(cell, base_from_tcp, *speed_mm_s, *grip_current_a),
-        Command::ReadTactile { frames } => read_frames(cell, *frames).map(Event::Tactile),
+        Command::ReadTactile { frames } => read_tactile(cell, *frames),
         Command::Regrasp {
             base_from_tcp,
             speed_mm_s,
@@ -52,7 +52,14 @@ pub fn execute(cell: &mut Cell, command: &Command) -> Event {
 fn prepare(cell: &mut Cell, open_mm: f64, bias_frames: usize) -> Result<Event, DeviceError> {
     cell.gripper.reference()?;
     cell.gripper.move_to(open_mm)?;
-    read_frames(cell, bias_frames).map(Event::Tactile)
+    read_tactile(cell, bias_frames)
+}
+
+fn read_tactile(cell: &mut Cell, count: usize) -> Result<Event, DeviceError> {
+    Ok(Event::Tactile {
+        frames: read_frames(cell, count)?,
+        true_line: cell.cable_on_pad_truth(),
+    })
 }
 
 fn read_frames(cell: &mut Cell, count: usize) -> Result<Vec<TactileFrame>, DeviceError> {

@@ -20,8 +20,8 @@ use statig::prelude::*;
 
 use super::command::{Command, Event};
 use super::plan::Plan;
-use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord};
-use crate::geometry::{planar_to_spatial, t_corr};
+use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
+use crate::geometry::{LineInSensor, planar_to_spatial, t_corr};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
@@ -90,7 +90,7 @@ impl GraspTask {
     #[state(superstate = "grasping", entry_action = "enter_prepare")]
     fn prepare(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Tactile(frames) => {
+            Event::Tactile { frames, .. } => {
                 let mut estimator = BiasEstimator::new(self.plan.bias_frames);
                 match frames.iter().find_map(|frame| estimator.push(&frame.raw)) {
                     Some(bias) => {
@@ -156,7 +156,7 @@ impl GraspTask {
     #[state(superstate = "grasping", entry_action = "enter_read_tactile")]
     fn evaluate(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Tactile(frames) => self.judge(context, frames),
+            Event::Tactile { frames, true_line } => self.judge(context, frames, *true_line),
             _ => Super,
         }
     }
@@ -177,7 +177,7 @@ impl GraspTask {
     #[state(superstate = "grasping", entry_action = "enter_read_tactile")]
     fn verify(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Tactile(frames) => self.judge(context, frames),
+            Event::Tactile { frames, true_line } => self.judge(context, frames, *true_line),
             _ => Super,
         }
     }
@@ -302,13 +302,21 @@ impl GraspTask {
 
     /// Estimates the cable's pose from the frames, records the grasp, and
     /// decides: done, regrasp (aiming with T_corr) or failed.
-    fn judge(&mut self, context: &mut Context, frames: &[TactileFrame]) -> Outcome<State> {
+    fn judge(
+        &mut self,
+        context: &mut Context,
+        frames: &[TactileFrame],
+        true_line: Option<LineInSensor>,
+    ) -> Outcome<State> {
         let attempt = self.regrasps_done;
         let raw: Vec<RawFrame> = frames.iter().map(|frame| frame.raw).collect();
         let Some(map) = self.bias.as_ref().and_then(|bias| bias.remove_mean(&raw)) else {
             return fault(context, None, "no tactile frames to evaluate".into());
         };
-        let fit = self.plan.estimator.estimate(&map, &self.plan.fit);
+        let fit = self
+            .plan
+            .estimator
+            .estimate(&map, &self.plan.fit, true_line);
         let estimated_error = fit
             .as_ref()
             .ok()
@@ -320,7 +328,11 @@ impl GraspTask {
             map,
             fit: fit.as_ref().ok().cloned(),
             estimated_error,
-            truth: None,
+            truth: true_line.map(|line| Truth {
+                line,
+                error: line.error_to(&self.plan.target),
+                estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
+            }),
         });
         let fit = match fit {
             Ok(fit) => fit,
@@ -490,7 +502,10 @@ mod tests {
         fn frames(&self, count: usize, pressed: Option<LineInSensor>) -> Event {
             let mut r = rng(1, Stream::Tactile);
             let raw = self.model.frame(pressed.map(|line| (line, 2.5)), &mut r);
-            Event::Tactile(vec![TactileFrame { t_s: 0.0, raw }; count])
+            Event::Tactile {
+                frames: vec![TactileFrame { t_s: 0.0, raw }; count],
+                true_line: pressed,
+            }
         }
 
         fn state(&self) -> &'static str {

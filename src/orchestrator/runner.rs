@@ -9,7 +9,7 @@ use super::command::Event;
 use super::executor::execute;
 use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
-use super::record::{RunRecord, Truth};
+use super::record::RunRecord;
 use crate::cell::Cell;
 use crate::task::{CellFile, TaskFile};
 
@@ -52,11 +52,7 @@ impl Runner {
             None => return false,
         };
         self.context.now_s = self.cell.clock.now_s();
-        let grasps_before = self.context.record.grasps.len();
         self.machine.handle_with_context(&event, &mut self.context);
-        if self.context.record.grasps.len() > grasps_before {
-            self.attach_truth();
-        }
         true
     }
 
@@ -75,21 +71,5 @@ impl Runner {
 
     pub fn into_record(self) -> RunRecord {
         self.context.record
-    }
-
-    /// A simulated cell knows where the cable really lies: keep it beside
-    /// the estimate of the grasp just recorded.
-    fn attach_truth(&mut self) {
-        let record = &mut self.context.record;
-        let target = record.target;
-        let (Some(grasp), Some(line)) = (record.grasps.last_mut(), self.cell.cable_on_pad_truth())
-        else {
-            return;
-        };
-        grasp.truth = Some(Truth {
-            line,
-            error: line.error_to(&target),
-            estimate_error: grasp.fit.as_ref().map(|fit| fit.line().error_to(&line)),
-        });
     }
 }

@@ -70,6 +70,22 @@ pub struct Policy {
     pub estimator: Estimator,
     /// Regrasps allowed; a policy stops regrasping once within tolerance.
     pub max_regrasps: u32,
+    /// Error sources switched off for this policy, to show what each one
+    /// costs (an error budget). Simulated cells only.
+    #[serde(default)]
+    pub perfect: Vec<ErrorSource>,
+}
+
+/// A source of error of the simulated cell that a policy can switch off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorSource {
+    /// The tactile estimate: the cable's true pose is used instead.
+    Estimator,
+    /// The arm's repeatability: it reaches every pose exactly.
+    Arm,
+    /// The taxels' noise.
+    SensorNoise,
 }
 
 /// At least one policy, with distinct names.

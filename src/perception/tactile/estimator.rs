@@ -1,4 +1,5 @@
-//! The choice of estimator: the paper's centroids, or cablecell's ridge.
+//! The choice of estimator: the paper's centroids, cablecell's ridge, or,
+//! on a simulated cell, the truth itself.
 
 use serde::{Deserialize, Serialize};
 
@@ -12,6 +13,9 @@ use crate::geometry::LineInSensor;
 pub enum Estimator {
     /// The paper's: row or column centroids and a least-squares line.
     Centroids,
+    /// The cable's true pose instead of the pad's estimate: a simulated
+    /// cell's error budget uses it to switch the estimator's error off.
+    Oracle,
 }
 
 /// An estimator's answer, with its own details.
@@ -19,12 +23,23 @@ pub enum Estimator {
 #[serde(tag = "estimator", rename_all = "snake_case")]
 pub enum Estimate {
     Centroids(WireFit),
+    Oracle { line: LineInSensor },
 }
 
 impl Estimator {
-    pub fn estimate(self, map: &TactileMap, config: &FitConfig) -> Result<Estimate, FitError> {
+    /// Estimates the cable's line from `map`; `true_line` is where it
+    /// really lies, when the cell knows.
+    pub fn estimate(
+        self,
+        map: &TactileMap,
+        config: &FitConfig,
+        true_line: Option<LineInSensor>,
+    ) -> Result<Estimate, FitError> {
         match self {
             Estimator::Centroids => fit_wire(map, config).map(Estimate::Centroids),
+            Estimator::Oracle => true_line
+                .map(|line| Estimate::Oracle { line })
+                .ok_or(FitError::NoTruth),
         }
     }
 }
@@ -33,6 +48,7 @@ impl Estimate {
     pub fn line(&self) -> LineInSensor {
         match self {
             Estimate::Centroids(fit) => fit.line,
+            Estimate::Oracle { line } => *line,
         }
     }
 }

@@ -149,6 +149,10 @@ pub enum FitError {
         pitch_mm: f64,
         contact_threshold_v: f64,
     },
+    /// The oracle estimator was asked on a cell that cannot know where the
+    /// cable really lies: use it on simulated cells only.
+    #[error("the oracle estimator needs the cable's true pose, which only a simulated cell knows")]
+    NoTruth,
 }
 
 /// The clamped weights of a map, divided by their peak.
