@@ -111,6 +111,9 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
     let (mut task, mut cell) = (task.clone(), cell.clone());
     task.tactile.estimator = policy.estimator;
     task.regrasp.max_regrasps = policy.max_regrasps;
+    if let Some(tolerance) = policy.tolerance {
+        task.tolerance = tolerance;
+    }
     for source in &policy.perfect {
         match source {
             ErrorSource::Estimator => task.tactile.estimator = Estimator::Oracle,

@@ -436,7 +436,7 @@ mod tests {
     use crate::sim::{Stream, rng};
     use crate::task::cell_file::SimTactileConfig;
 
-    fn plan(max_regrasps: u32) -> Plan {
+    fn plan(max_regrasps: u32, estimator: Estimator) -> Plan {
         Plan {
             target: LineInSensor::new(0.0, 0.0),
             tolerance: PoseError {
@@ -455,7 +455,7 @@ mod tests {
                 pitch_mm: 3.55,
                 contact_threshold_v: 0.05,
             },
-            estimator: Estimator::Centroids,
+            estimator,
             tcp_from_sensor: Isometry3::from_parts(
                 Translation3::new(0.0, 0.0, -10.0),
                 UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
@@ -471,7 +471,11 @@ mod tests {
 
     impl Harness {
         fn new(max_regrasps: u32) -> Self {
-            let plan = plan(max_regrasps);
+            Self::with_estimator(max_regrasps, Estimator::Centroids)
+        }
+
+        fn with_estimator(max_regrasps: u32, estimator: Estimator) -> Self {
+            let plan = plan(max_regrasps, estimator);
             let record = RunRecord::new("t", "c", 0, plan.target, plan.tolerance);
             let mut context = Context::new(record);
             let machine = GraspTask::new(plan)
@@ -546,7 +550,7 @@ mod tests {
             panic!("expected a grasp");
         };
         // With a zero target the sensor frame is the cable's frame.
-        let base_from_sensor = base_from_tcp * plan(1).tcp_from_sensor;
+        let base_from_sensor = base_from_tcp * plan(1, Estimator::Centroids).tcp_from_sensor;
         assert!((base_from_sensor.translation.vector).norm() < 1e-9);
         assert!(base_from_sensor.rotation.angle() < 1e-9);
         assert_eq!(h.state(), "trial_grasp");
@@ -571,7 +575,8 @@ mod tests {
 
     #[test]
     fn the_regrasp_aims_with_t_corr_from_the_measured_pose() {
-        let mut h = Harness::new(1);
+        // The oracle estimate is exact, so the aim must be too.
+        let mut h = Harness::with_estimator(1, Estimator::Oracle);
         h.up_to_trial_grasp();
         let grasped = Isometry3::from_parts(
             Translation3::new(400.0, 10.0, 300.0),
@@ -583,7 +588,7 @@ mod tests {
             panic!("expected a regrasp in {}", h.state());
         };
         // Where the true cable lies in the new pad frame: near the target.
-        let tcp_from_sensor = plan(1).tcp_from_sensor;
+        let tcp_from_sensor = plan(1, Estimator::Oracle).tcp_from_sensor;
         let old_from_new =
             (grasped * tcp_from_sensor).inverse() * (base_from_tcp * tcp_from_sensor);
         assert!(
@@ -727,6 +732,27 @@ mod tests {
                 "fault"
             ]
         );
+    }
+
+    #[test]
+    fn the_oracle_estimator_without_truth_fails_the_grasp() {
+        let mut h = Harness::with_estimator(1, Estimator::Oracle);
+        h.up_to_trial_grasp();
+        h.grasped_at(Isometry3::identity());
+        let Event::Tactile { frames, .. } = h.frames(4, Some(LineInSensor::new(0.0, 1.0))) else {
+            unreachable!("frames() makes a tactile event");
+        };
+        h.feed(Event::Tactile {
+            frames,
+            true_line: None,
+        });
+        assert_eq!(h.state(), "failed");
+        assert!(matches!(
+            &h.context.record.outcome,
+            Some(RunOutcome::Failed {
+                reason: Failure::FitFailed { attempt: 0, .. }
+            })
+        ));
     }
 
     #[test]

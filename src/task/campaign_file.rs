@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Deserializer, de::Error};
 
 use super::load::{ConfigError, parse, read};
+use super::task_file::Tolerance;
 use super::validate::{at_least_one, non_negative, non_negative_range};
 use crate::perception::tactile::Estimator;
 
@@ -70,6 +71,9 @@ pub struct Policy {
     pub estimator: Estimator,
     /// Regrasps allowed; a policy stops regrasping once within tolerance.
     pub max_regrasps: u32,
+    /// The tolerance it regrasps towards, if not the task's.
+    #[serde(default)]
+    pub tolerance: Option<Tolerance>,
     /// Error sources switched off for this policy, to show what each one
     /// costs (an error budget). Simulated cells only.
     #[serde(default)]

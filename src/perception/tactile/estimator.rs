@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::fit::{FitConfig, FitError, WireFit, fit_wire};
 use super::map::TactileMap;
+use super::ridge_fit::{RidgeFit, fit_ridge};
 use crate::geometry::LineInSensor;
 
 /// How a Δv map becomes the cable's line on the pad.
@@ -13,6 +14,9 @@ use crate::geometry::LineInSensor;
 pub enum Estimator {
     /// The paper's: row or column centroids and a least-squares line.
     Centroids,
+    /// cablecell's: a line-spread ridge fitted to every taxel by
+    /// Levenberg–Marquardt; no centroid truncation at the pad's edge.
+    Ridge,
     /// The cable's true pose instead of the pad's estimate: a simulated
     /// cell's error budget uses it to switch the estimator's error off.
     Oracle,
@@ -23,6 +27,7 @@ pub enum Estimator {
 #[serde(tag = "estimator", rename_all = "snake_case")]
 pub enum Estimate {
     Centroids(WireFit),
+    Ridge(RidgeFit),
     Oracle { line: LineInSensor },
 }
 
@@ -37,6 +42,7 @@ impl Estimator {
     ) -> Result<Estimate, FitError> {
         match self {
             Estimator::Centroids => fit_wire(map, config).map(Estimate::Centroids),
+            Estimator::Ridge => fit_ridge(map, config).map(Estimate::Ridge),
             Estimator::Oracle => true_line
                 .map(|line| Estimate::Oracle { line })
                 .ok_or(FitError::NoTruth),
@@ -48,6 +54,7 @@ impl Estimate {
     pub fn line(&self) -> LineInSensor {
         match self {
             Estimate::Centroids(fit) => fit.line,
+            Estimate::Ridge(fit) => fit.line,
             Estimate::Oracle { line } => *line,
         }
     }

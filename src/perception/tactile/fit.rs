@@ -212,20 +212,29 @@ struct Samples {
     len: usize,
 }
 
+impl FitConfig {
+    /// Refuses a configuration that is not physical, for every estimator.
+    pub fn validate(&self) -> Result<(), FitError> {
+        let pitch_ok = (PITCH_RANGE_MM.0..=PITCH_RANGE_MM.1).contains(&self.pitch_mm);
+        let threshold_ok = self.contact_threshold_v.is_finite() && self.contact_threshold_v >= 0.0;
+        if pitch_ok && threshold_ok {
+            Ok(())
+        } else {
+            Err(FitError::InvalidConfig {
+                pitch_mm: self.pitch_mm,
+                contact_threshold_v: self.contact_threshold_v,
+            })
+        }
+    }
+}
+
 /// The wire parameters of one tactile map.
 pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitError> {
+    config.validate()?;
     let FitConfig {
         pitch_mm,
         contact_threshold_v,
     } = *config;
-    let pitch_ok = (PITCH_RANGE_MM.0..=PITCH_RANGE_MM.1).contains(&pitch_mm);
-    let threshold_ok = contact_threshold_v.is_finite() && contact_threshold_v >= 0.0;
-    if !pitch_ok || !threshold_ok {
-        return Err(FitError::InvalidConfig {
-            pitch_mm,
-            contact_threshold_v,
-        });
-    }
 
     let weights = Weights::of(map);
     let peak_v = weights.peak_v;

@@ -13,6 +13,7 @@ pub mod bias;
 pub mod estimator;
 pub mod fit;
 pub mod map;
+pub mod ridge_fit;
 
 pub use bias::{Bias, BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame};
 pub use estimator::{Estimate, Estimator};
