@@ -6,6 +6,7 @@ use crate::hw::clock::{Clock, SimClock};
 use crate::hw::detector::{CableDetector, OracleDetector};
 use crate::hw::gripper::{Gripper, SimGripper};
 use crate::hw::tactile::{SimTactile, TactileSensor};
+use crate::sim::motion::CartesianLimits;
 use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};
@@ -31,7 +32,13 @@ impl Cell {
             ArmBackend::Sim(sim) => Box::new(SimArm::new(
                 world.clone(),
                 file.arm.max_speed_mm_s,
-                sim.accel_mm_s2,
+                CartesianLimits {
+                    accel_mm_s2: sim.max_accel_mm_s2,
+                    jerk_mm_s3: sim.max_jerk_mm_s3,
+                    angular_speed_rad_s: sim.max_angular_speed_rad_s,
+                    angular_accel_rad_s2: sim.max_angular_accel_rad_s2,
+                    angular_jerk_rad_s3: sim.max_angular_jerk_rad_s3,
+                },
                 sim.repeatability_mm,
                 rng(seed, Stream::Arm),
             )),
@@ -41,6 +48,7 @@ impl Cell {
                 world.clone(),
                 sim.stroke_mm,
                 sim.speed_mm_s,
+                sim.squeeze_fraction_per_a,
             )),
         };
         let tactile: Box<dyn TactileSensor> = match &file.tactile.backend {
@@ -79,6 +87,6 @@ impl Cell {
 
     /// Where the cable really lies on the pad, if the cell can know it.
     pub fn cable_on_pad_truth(&self) -> Option<LineInSensor> {
-        lock(&self.world).held
+        lock(&self.world).held()
     }
 }

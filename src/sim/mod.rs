@@ -1,8 +1,11 @@
 //! The simulated cell: the physical world the simulated devices share (a
-//! cable between two supports, where the arm and the jaws are), and the
-//! tactile pad's physics. The devices themselves live beside their traits
-//! in `hw/`.
+//! cable between two supports, where the arm and the jaws are), the
+//! cable's and the tactile pad's physics, and the arm's motion timing. The
+//! devices themselves live beside their traits in `hw/`. The model and its
+//! parameters: docs/simulated-cell.md.
 
+pub mod cable;
+pub mod motion;
 pub mod tactile_model;
 pub mod world;
 

@@ -1,10 +1,12 @@
-//! What is where in the simulated cell.
+//! What is where in the simulated cell, and what the cable does when the
+//! jaws close on it and open again.
 
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
 
-use crate::geometry::LineInSensor;
+use super::cable::CableModel;
+use crate::geometry::{LineInSensor, planar_to_spatial};
 use crate::task::cell_file::WorldConfig;
 
 /// The world as the simulated devices share it.
@@ -16,21 +18,44 @@ pub fn lock(world: &SharedWorld) -> MutexGuard<'_, SimWorld> {
     world.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
+/// Newton steps that find the point of the sagging cable nearest the pad's
+/// centre; the sag's slope changes by well under 1 % between steps.
+const NEAREST_POINT_STEPS: usize = 4;
+
+/// The cable while the jaws hold it.
+#[derive(Debug, Clone, Copy)]
+pub struct Grasp {
+    /// Where it lay on the pad when the jaws touched it.
+    pub caught: LineInSensor,
+    /// Where the closing jaws left it: pressed on the pad, moving with
+    /// the hand.
+    pub held: LineInSensor,
+    /// The cable's midpoint frame seen from the line it was caught on (a
+    /// frame on the pad: origin at the foot of the perpendicular, x along
+    /// the line), so that a release can put the cable back in the world.
+    caught_line_from_cable: Isometry3<f64>,
+}
+
 #[derive(Debug, Clone)]
 pub struct SimWorld {
     /// Simulated time since the cell started.
     pub now_s: f64,
-    /// The cable's free pose: x along it, y up in its vertical plane, z
-    /// horizontal (towards the camera).
+    /// The free cable's midpoint frame: x along it, y up in its vertical
+    /// plane, z horizontal (towards the camera). The cable sags between
+    /// its supports about this frame (see `CableModel`).
     pub base_from_cable: Isometry3<f64>,
     pub cable_diameter_mm: f64,
+    pub cable: CableModel,
     capture_half_height_mm: f64,
     tcp_from_sensor: Isometry3<f64>,
     /// Where the arm's TCP really is.
     pub base_from_tcp: Isometry3<f64>,
     pub opening_mm: f64,
-    /// The cable pressed on the pad, while the jaws hold it.
-    pub held: Option<LineInSensor>,
+    /// The cable between the jaws, while they hold it.
+    pub grasp: Option<Grasp>,
+    /// How far each pad is pressed into the cable, as a fraction of its
+    /// diameter, while the jaws hold it.
+    pub squeeze_fraction: f64,
 }
 
 impl SimWorld {
@@ -48,11 +73,13 @@ impl SimWorld {
             now_s: 0.0,
             base_from_cable,
             cable_diameter_mm: config.cable_diameter_mm,
+            cable: CableModel::new(config),
             capture_half_height_mm: config.capture_half_height_mm,
             tcp_from_sensor,
             base_from_tcp,
             opening_mm: 0.0,
-            held: None,
+            grasp: None,
+            squeeze_fraction: 0.0,
         }
     }
 
@@ -60,25 +87,69 @@ impl SimWorld {
         Arc::new(Mutex::new(self))
     }
 
-    /// The free cable as the pad would see it if the jaws closed now:
-    /// its line projected onto the pad's plane. `None` if the cable runs
-    /// along the closing axis.
+    /// The cable pressed on the pad, while the jaws hold it.
+    pub fn held(&self) -> Option<LineInSensor> {
+        self.grasp.map(|grasp| grasp.held)
+    }
+
+    fn base_from_sensor(&self) -> Isometry3<f64> {
+        self.base_from_tcp * self.tcp_from_sensor
+    }
+
+    /// The free cable as the pad would see it if the jaws closed now: its
+    /// tangent at the point nearest the pad's centre, projected onto the
+    /// pad's plane. `None` if the cable runs along the closing axis.
     pub fn cable_in_sensor(&self) -> Option<LineInSensor> {
-        let base_from_sensor = self.base_from_tcp * self.tcp_from_sensor;
-        let sensor_from_cable = base_from_sensor.inverse() * self.base_from_cable;
-        let point = sensor_from_cable.translation.vector;
-        let direction = sensor_from_cable.rotation * Vector3::x();
-        let in_plane = Vector2::new(direction.x, direction.y);
-        (in_plane.norm() > 1e-6).then(|| LineInSensor::through(point.xy(), in_plane))
+        let sensor_from_cable = self.base_from_sensor().inverse() * self.base_from_cable;
+        let pad_centre_in_cable = sensor_from_cable.inverse().translation.vector;
+        let mut u_mm = pad_centre_in_cable.x;
+        let mut line = None;
+        for _ in 0..NEAREST_POINT_STEPS {
+            let (height_mm, slope) = self.cable.height_and_slope(u_mm);
+            let point = sensor_from_cable * nalgebra::Point3::new(u_mm, height_mm, 0.0);
+            let tangent = sensor_from_cable.rotation * Vector3::new(1.0, slope, 0.0);
+            let in_plane = Vector2::new(tangent.x, tangent.y);
+            let squared = in_plane.norm_squared();
+            if squared < 1e-12 {
+                return None;
+            }
+            line = Some(LineInSensor::through(point.coords.xy(), in_plane));
+            // Slide along the tangent to the foot of the perpendicular
+            // from the pad's centre.
+            u_mm -= point.coords.xy().dot(&in_plane) / squared;
+        }
+        line
     }
 
     /// The jaws close: the cable is caught if it lies within reach of the
-    /// fingers, and is then pressed flat on the pad where it lay.
-    pub fn close_on_cable(&mut self) -> Option<LineInSensor> {
-        self.held = self
+    /// fingers, and settles on the pad towards its axis.
+    pub fn close_on_cable(&mut self, squeeze_fraction: f64) -> Option<LineInSensor> {
+        let caught = self
             .cable_in_sensor()
-            .filter(|line| line.offset_mm.abs() <= self.capture_half_height_mm);
-        self.held
+            .filter(|line| line.offset_mm.abs() <= self.capture_half_height_mm)?;
+        let caught_line_from_cable = planar_to_spatial(&caught.sensor_from_line()).inverse()
+            * self.base_from_sensor().inverse()
+            * self.base_from_cable;
+        let held = self.cable.settled(&caught);
+        self.grasp = Some(Grasp {
+            caught,
+            held,
+            caught_line_from_cable,
+        });
+        self.squeeze_fraction = squeeze_fraction;
+        Some(held)
+    }
+
+    /// The jaws open: the cable springs back, partly, towards where it was
+    /// caught, and stays there as the new free cable.
+    pub fn release(&mut self) {
+        if let Some(grasp) = self.grasp.take() {
+            let free = self.cable.released(&grasp.caught, &grasp.held);
+            self.base_from_cable = self.base_from_sensor()
+                * planar_to_spatial(&free.sensor_from_line())
+                * grasp.caught_line_from_cable;
+        }
+        self.squeeze_fraction = 0.0;
     }
 }
 
@@ -102,21 +173,30 @@ fn cable_frame(center_mm: [f64; 3], yaw_rad: f64, tilt_rad: f64) -> Isometry3<f6
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sim::cable::tests::config;
     use approx::assert_relative_eq;
 
+    /// A stiff straight cable: no sag, no settle, no spring-back.
     fn world(tilt_rad: f64) -> SimWorld {
         let config = WorldConfig {
-            cable_diameter_mm: 2.5,
-            cable_center_mm: [450.0, 0.0, 250.0],
-            cable_yaw_rad: 0.3,
             cable_tilt_rad: tilt_rad,
-            capture_half_height_mm: 12.0,
+            cable_weight_n_mm: 0.0,
+            settle_fraction: 0.0,
+            spring_back_fraction: 0.0,
+            ..config()
         };
-        let tcp_from_sensor = Isometry3::from_parts(
+        SimWorld::new(&config, tcp_from_sensor())
+    }
+
+    fn tcp_from_sensor() -> Isometry3<f64> {
+        Isometry3::from_parts(
             Translation3::new(0.0, 0.0, -10.0),
             UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
-        );
-        SimWorld::new(&config, tcp_from_sensor)
+        )
+    }
+
+    fn over(world: &SimWorld, base_from_sensor: Isometry3<f64>) -> Isometry3<f64> {
+        base_from_sensor * world.tcp_from_sensor.inverse()
     }
 
     #[test]
@@ -133,9 +213,9 @@ mod tests {
 
     #[test]
     fn a_perfect_grasp_puts_the_cable_on_the_pads_x_axis() {
-        let mut world = world(0.0);
-        world.base_from_tcp = world.base_from_cable * world.tcp_from_sensor.inverse();
-        let line = world.close_on_cable().unwrap();
+        let mut world = SimWorld::new(&config(), tcp_from_sensor());
+        world.base_from_tcp = over(&world, world.base_from_cable);
+        let line = world.close_on_cable(0.05).unwrap();
         assert_relative_eq!(line.alpha_rad, 0.0, epsilon = 1e-9);
         assert_relative_eq!(line.offset_mm, 0.0, epsilon = 1e-9);
     }
@@ -147,9 +227,8 @@ mod tests {
         // Grasp 2 mm too low: the cable's midpoint sits 2 mm up the pad
         // (towards +y), and the line through it at 0.2 rad is 2 cos 0.2 mm
         // from the pad's centre.
-        world.base_from_tcp =
-            Translation3::new(0.0, 0.0, -2.0) * level * world.tcp_from_sensor.inverse();
-        let line = world.close_on_cable().unwrap();
+        world.base_from_tcp = Translation3::new(0.0, 0.0, -2.0) * over(&world, level);
+        let line = world.close_on_cable(0.05).unwrap();
         assert_relative_eq!(line.alpha_rad, 0.2, epsilon = 1e-9);
         assert_relative_eq!(line.offset_mm, 2.0 * 0.2_f64.cos(), epsilon = 1e-9);
     }
@@ -157,10 +236,66 @@ mod tests {
     #[test]
     fn a_cable_out_of_reach_is_not_caught() {
         let mut world = world(0.0);
-        world.base_from_tcp = Translation3::new(0.0, 0.0, 20.0)
-            * world.base_from_cable
-            * world.tcp_from_sensor.inverse();
-        assert!(world.close_on_cable().is_none());
-        assert!(world.held.is_none());
+        world.base_from_tcp =
+            Translation3::new(0.0, 0.0, 20.0) * over(&world, world.base_from_cable);
+        assert!(world.close_on_cable(0.05).is_none());
+        assert!(world.grasp.is_none());
+    }
+
+    #[test]
+    fn off_the_midpoint_the_pad_sees_the_sags_slope_and_height() {
+        let mut world = SimWorld::new(&config(), tcp_from_sensor());
+        let u_mm = 20.0;
+        let (height_mm, slope) = world.cable.height_and_slope(u_mm);
+        let along = world.base_from_cable * Translation3::new(u_mm, 0.0, 0.0);
+        world.base_from_tcp = over(&world, along);
+        let caught = world.cable_in_sensor().unwrap();
+        // The pad sees the tangent at the foot of its perpendicular, a
+        // little short of u (by about h s), where the slope is a little
+        // smaller: to first order in the sag's curvature, the tangent at u,
+        // which passes h cos(atan s) above the pad's centre.
+        assert_relative_eq!(caught.alpha_rad, slope.atan(), epsilon = 1e-3);
+        assert_relative_eq!(
+            caught.offset_mm,
+            height_mm * slope.atan().cos(),
+            epsilon = 1e-3
+        );
+        assert!(height_mm > 0.5, "{height_mm}");
+    }
+
+    #[test]
+    fn settle_and_spring_back_leave_the_cable_where_the_model_says() {
+        let mut world = SimWorld::new(&config(), tcp_from_sensor());
+        // Grasp 3 mm too high and turned by 0.2 rad about the closing axis.
+        let sensor = world.base_from_cable
+            * Translation3::new(0.0, 3.0, 0.0)
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.2);
+        world.base_from_tcp = over(&world, sensor);
+        let caught = world.cable_in_sensor().unwrap();
+        let held = world.close_on_cable(0.05).unwrap();
+        assert_eq!(held, world.cable.settled(&caught));
+        assert!(held.offset_mm.abs() < caught.offset_mm.abs());
+        world.release();
+        let free = world.cable_in_sensor().unwrap();
+        let expected = world.cable.released(&caught, &held);
+        assert_relative_eq!(free.alpha_rad, expected.alpha_rad, epsilon = 1e-6);
+        assert_relative_eq!(free.offset_mm, expected.offset_mm, epsilon = 1e-6);
+        assert!(world.grasp.is_none());
+    }
+
+    #[test]
+    fn without_spring_back_the_cable_stays_where_it_was_held() {
+        let config = WorldConfig {
+            spring_back_fraction: 0.0,
+            ..config()
+        };
+        let mut world = SimWorld::new(&config, tcp_from_sensor());
+        let sensor = world.base_from_cable * Translation3::new(0.0, -2.0, 0.0);
+        world.base_from_tcp = over(&world, sensor);
+        let held = world.close_on_cable(0.05).unwrap();
+        world.release();
+        let free = world.cable_in_sensor().unwrap();
+        assert_relative_eq!(free.offset_mm, held.offset_mm, epsilon = 1e-6);
+        assert_relative_eq!(free.alpha_rad, held.alpha_rad, epsilon = 1e-6);
     }
 }

@@ -42,15 +42,32 @@ pub enum ArmBackend {
     Sim(SimArmConfig),
 }
 
+/// The simulated arm: where it ends up and how long it takes. Its motion
+/// is a jerk-limited straight line (see `sim::motion`), the translation's
+/// speed capped by the task; the limits are a Panda's Cartesian ones.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimArmConfig {
-    /// Standard deviation of the reached position about the commanded one
-    /// (a Panda's pose repeatability is about 0.1 mm).
+    /// Standard deviation, per axis, of the reached position about the
+    /// commanded one (a Panda's pose repeatability is about 0.1 mm); 0
+    /// switches it off.
     #[serde(deserialize_with = "non_negative")]
     pub repeatability_mm: f64,
+    /// Translational acceleration limit (a Panda's: 13 m/s²).
     #[serde(deserialize_with = "positive")]
-    pub accel_mm_s2: f64,
+    pub max_accel_mm_s2: f64,
+    /// Translational jerk limit (a Panda's: 6500 m/s³).
+    #[serde(deserialize_with = "positive")]
+    pub max_jerk_mm_s3: f64,
+    /// Rotational speed limit (a Panda's: 2.5 rad/s).
+    #[serde(deserialize_with = "positive")]
+    pub max_angular_speed_rad_s: f64,
+    /// Rotational acceleration limit (a Panda's: 25 rad/s²).
+    #[serde(deserialize_with = "positive")]
+    pub max_angular_accel_rad_s2: f64,
+    /// Rotational jerk limit (a Panda's: 12500 rad/s³).
+    #[serde(deserialize_with = "positive")]
+    pub max_angular_jerk_rad_s3: f64,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -71,8 +88,14 @@ pub struct SimGripperConfig {
     /// Largest jaw opening (the PG70's stroke is 68 mm).
     #[serde(deserialize_with = "positive")]
     pub stroke_mm: f64,
+    /// Jaw speed while moving freely.
     #[serde(deserialize_with = "positive")]
     pub speed_mm_s: f64,
+    /// How much the jaws squeeze a cable (both pads together, as a
+    /// fraction of its diameter) per ampere of grip current: it sets how
+    /// deep the cable dents the pads.
+    #[serde(deserialize_with = "positive")]
+    pub squeeze_fraction_per_a: f64,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -152,23 +175,59 @@ pub struct OracleConfig {
     pub offset_angle_rad: f64,
 }
 
-/// The simulated scene: one straight cable held between two supports.
+/// The simulated scene: one cable resting on two supports, sagging under
+/// its own weight, that the jaws drag and that springs back. See
+/// `sim::cable` and docs/simulated-cell.md.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldConfig {
     #[serde(deserialize_with = "positive")]
     pub cable_diameter_mm: f64,
-    /// The cable's midpoint between the supports, in the base frame.
+    /// The cable's midpoint between the supports (its lowest point, where
+    /// the detector puts the grasp frame), in the base frame.
     #[serde(deserialize_with = "vector3")]
     pub cable_center_mm: [f64; 3],
     /// Direction of the cable in the base's horizontal plane.
+    #[serde(deserialize_with = "finite")]
     pub cable_yaw_rad: f64,
-    /// Inclination of the cable from horizontal.
+    /// Inclination of the line between the supports from horizontal.
+    #[serde(deserialize_with = "finite")]
     pub cable_tilt_rad: f64,
     /// How far across the pad a cable can lie and still end up between the
     /// closing fingers.
     #[serde(deserialize_with = "positive")]
     pub capture_half_height_mm: f64,
+    /// Distance between the two supports.
+    #[serde(deserialize_with = "positive")]
+    pub support_span_mm: f64,
+    /// The cable's weight per length (0 for a straight cable).
+    #[serde(deserialize_with = "non_negative")]
+    pub cable_weight_n_mm: f64,
+    /// Bending stiffness EI: with the weight it sets the sag, and with the
+    /// span the cable's resistance to being shifted (48 EI / L³) or turned
+    /// (12 EI / L a², a the jaws' half-width) on the pad.
+    #[serde(deserialize_with = "positive")]
+    pub bending_stiffness_n_mm2: f64,
+    /// The closing jaws' drag, as the resistance at which a cable settles
+    /// half of `settle_fraction`: a cable softer than this is dragged.
+    #[serde(deserialize_with = "positive")]
+    pub jaw_drag_stiffness_n_mm: f64,
+    /// What holds a bend once the jaws open (the strands' internal
+    /// friction, the silicone's grip), as the resistance at which a cable
+    /// recovers half of `spring_back_fraction`: a cable stiffer than this
+    /// springs back.
+    #[serde(deserialize_with = "positive")]
+    pub hold_stiffness_n_mm: f64,
+    /// For a limp cable, the fraction of the caught pose's distance from
+    /// the pad's axis (offset and angle) that the closing jaws remove; 0
+    /// switches settling off.
+    #[serde(deserialize_with = "fraction")]
+    pub settle_fraction: f64,
+    /// For a cable far stiffer than what holds a bend, the fraction of the
+    /// displacement the grasp imposed that it recovers when the jaws open
+    /// (below 1: copper strands take a set); 0 switches spring-back off.
+    #[serde(deserialize_with = "fraction")]
+    pub spring_back_fraction: f64,
 }
 
 /// A rigid transform as written in a cell file.

@@ -1,26 +1,35 @@
 //! A simulated gripper: refuses to move until referenced (as the PG70
-//! does), and closes until the jaws meet the cable or each other.
+//! does), and closes until the jaws meet the cable or each other; opening
+//! lets the cable go.
 
 use super::{GripOutcome, Gripper};
 use crate::hw::{DeviceError, DeviceKind};
 use crate::sim::world::{SharedWorld, lock};
 
-/// Squeeze of the cable's insulation under the grip.
-const SQUEEZE_FRACTION: f64 = 0.1;
+/// The most the jaws can squeeze a cable, as a fraction of its diameter:
+/// beyond it the insulation, not the silicone, takes the force.
+const MAX_SQUEEZE_FRACTION: f64 = 0.3;
 
 pub struct SimGripper {
     world: SharedWorld,
     stroke_mm: f64,
     speed_mm_s: f64,
+    squeeze_fraction_per_a: f64,
     referenced: bool,
 }
 
 impl SimGripper {
-    pub fn new(world: SharedWorld, stroke_mm: f64, speed_mm_s: f64) -> Self {
+    pub fn new(
+        world: SharedWorld,
+        stroke_mm: f64,
+        speed_mm_s: f64,
+        squeeze_fraction_per_a: f64,
+    ) -> Self {
         Self {
             world,
             stroke_mm,
             speed_mm_s,
+            squeeze_fraction_per_a,
             referenced: false,
         }
     }
@@ -39,7 +48,7 @@ impl Gripper for SimGripper {
         let mut world = lock(&self.world);
         world.now_s += (self.stroke_mm - world.opening_mm) / self.speed_mm_s;
         world.opening_mm = self.stroke_mm;
-        world.held = None;
+        world.release();
         self.referenced = true;
         Ok(())
     }
@@ -60,8 +69,8 @@ impl Gripper for SimGripper {
         let mut world = lock(&self.world);
         world.now_s += (opening_mm - world.opening_mm).abs() / self.speed_mm_s;
         world.opening_mm = opening_mm;
-        if world.held.is_some() && opening_mm > world.cable_diameter_mm {
-            world.held = None;
+        if world.grasp.is_some() && opening_mm > world.cable_diameter_mm {
+            world.release();
         }
         Ok(())
     }
@@ -73,15 +82,16 @@ impl Gripper for SimGripper {
         if current_a <= 0.0 {
             return Err(self.refuse("grip", format!("current {current_a} A is not positive")));
         }
+        let squeeze_fraction = (self.squeeze_fraction_per_a * current_a).min(MAX_SQUEEZE_FRACTION);
         let mut world = lock(&self.world);
-        let closed_mm = if world.close_on_cable().is_some() {
-            world.cable_diameter_mm * (1.0 - SQUEEZE_FRACTION)
+        let closed_mm = if world.close_on_cable(squeeze_fraction).is_some() {
+            world.cable_diameter_mm * (1.0 - squeeze_fraction)
         } else {
             0.0
         };
         world.now_s += (world.opening_mm - closed_mm).max(0.0) / self.speed_mm_s;
         world.opening_mm = closed_mm;
-        Ok(if world.held.is_some() {
+        Ok(if world.grasp.is_some() {
             GripOutcome::Holding {
                 opening_mm: closed_mm,
             }

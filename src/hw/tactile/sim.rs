@@ -4,7 +4,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{TactileFrame, TactileSensor};
 use crate::hw::{DeviceError, DeviceKind};
-use crate::sim::tactile_model::TactileModel;
+use crate::sim::tactile_model::{Contact, Dents, TactileModel};
 use crate::sim::world::{SharedWorld, lock};
 
 pub struct SimTactile {
@@ -16,6 +16,9 @@ pub struct SimTactile {
     frames_read: u64,
     /// Fault injection: stop answering after this many frames.
     silent_after_frames: Option<u64>,
+    /// The last contact and the cap's deformation under it: a held cable
+    /// does not move between frames, so it is computed once per grasp.
+    dented: Option<(Contact, Dents)>,
 }
 
 impl SimTactile {
@@ -34,6 +37,7 @@ impl SimTactile {
             last_t_s: None,
             frames_read: 0,
             silent_after_frames,
+            dented: None,
         }
     }
 }
@@ -61,10 +65,25 @@ impl TactileSensor for SimTactile {
         world.now_s = t_s;
         self.last_t_s = Some(t_s);
         self.frames_read += 1;
-        let pressed = world.held.map(|line| (line, world.cable_diameter_mm));
+        let contact = world.held().map(|line| Contact {
+            line,
+            diameter_mm: world.cable_diameter_mm,
+            squeeze_fraction: world.squeeze_fraction,
+        });
+        let dents = match contact {
+            None => [0.0; crate::perception::tactile::TAXEL_COUNT],
+            Some(contact) => match self.dented {
+                Some((last, dents)) if last == contact => dents,
+                _ => {
+                    let dents = self.model.dents(&contact);
+                    self.dented = Some((contact, dents));
+                    dents
+                }
+            },
+        };
         Ok(TactileFrame {
             t_s,
-            raw: self.model.frame(pressed, &mut self.rng),
+            raw: self.model.frame_from_dents(&dents, &mut self.rng),
         })
     }
 }
