@@ -135,8 +135,37 @@ pub fn planar_to_spatial(planar: &Isometry2<f64>) -> Isometry3<f64> {
 /// (0, n); this moves to the foot of the perpendicular, which differs by a
 /// slide along the cable and stays finite for a cable along y.
 pub fn t_corr(measured: &LineInSensor, target: &LineInSensor) -> Isometry3<f64> {
+    t_corr_with_gain(measured, target, &CorrectionGain::PAPER)
+}
+
+/// How much of T_corr a regrasp applies: the paper applies all of it. A
+/// cable that springs back towards where it was caught undoes part of each
+/// correction, and a gain above 1 makes up for it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CorrectionGain {
+    /// Scales the correction's translation.
+    pub n: f64,
+    /// Scales the correction's rotation.
+    pub alpha: f64,
+}
+
+impl CorrectionGain {
+    pub const PAPER: CorrectionGain = CorrectionGain { n: 1.0, alpha: 1.0 };
+}
+
+/// T_corr with its translation and rotation scaled by `gain`.
+pub fn t_corr_with_gain(
+    measured: &LineInSensor,
+    target: &LineInSensor,
+    gain: &CorrectionGain,
+) -> Isometry3<f64> {
     let old_from_new = measured.sensor_from_line() * target.sensor_from_line().inverse();
-    planar_to_spatial(&old_from_new)
+    let scaled = Isometry2::new(
+        old_from_new.translation.vector * gain.n,
+        old_from_new.rotation.angle() * gain.alpha,
+    );
+    planar_to_spatial(&scaled)
 }
 
 #[cfg(test)]
@@ -200,6 +229,24 @@ mod tests {
         let err = seen.error_to(&target);
         assert_relative_eq!(err.n_mm, 0.0, epsilon = 1e-9);
         assert_relative_eq!(err.alpha_rad, 0.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn a_gain_scales_the_correction_and_one_is_the_paper() {
+        let measured = LineInSensor::new(0.1, 2.0);
+        let target = LineInSensor::new(0.0, 0.0);
+        let plain = t_corr(&measured, &target);
+        let gained = t_corr_with_gain(&measured, &target, &CorrectionGain { n: 1.5, alpha: 0.5 });
+        assert_relative_eq!(
+            gained.translation.vector,
+            plain.translation.vector * 1.5,
+            epsilon = 1e-12
+        );
+        assert_relative_eq!(
+            gained.rotation.angle(),
+            plain.rotation.angle() * 0.5,
+            epsilon = 1e-12
+        );
     }
 
     #[test]

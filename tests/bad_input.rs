@@ -63,7 +63,7 @@ fn unknown_key_names_file_line_column_and_field() {
         "{err}"
     );
     assert!(
-        err.contains("expected `max_regrasps` or `retreat_mm`"),
+        err.contains("expected one of `max_regrasps`, `retreat_mm`"),
         "{err}"
     );
 }

@@ -268,9 +268,9 @@ fn a_bad_campaign_file_says_what_and_where() {
     let (err, _, _dir) = refused("task = \"regrasp.toml\"", "task = \"missing.toml\"");
     assert!(err.contains("missing.toml: cannot read the file"), "{err}");
 
-    let (err, _, _dir) = refused("start_offset_mm = 5.0", "start_offset_mm = -5.0");
+    let (err, _, _dir) = refused("start_offset_max_mm = 10.0", "start_offset_max_mm = -5.0");
     assert!(
-        err.contains("perturbation.start_offset_mm: expected a number ≥ 0, found -5"),
+        err.contains("perturbation.start_offset_max_mm: expected a number ≥ 0, found -5"),
         "{err}"
     );
 }

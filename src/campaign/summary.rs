@@ -232,6 +232,7 @@ mod tests {
                 start_offset_mm: 0.0,
                 start_angle_rad: 0.0,
                 cable_diameter_mm: 2.5,
+                cable_stiffness_n_mm2: 60.0,
                 sensor_noise_fraction: 0.02,
             },
             outcome,

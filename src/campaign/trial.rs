@@ -4,7 +4,6 @@
 use std::time::Instant;
 
 use rand::RngExt;
-use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
@@ -31,6 +30,7 @@ pub struct Perturbation {
     pub start_offset_mm: f64,
     pub start_angle_rad: f64,
     pub cable_diameter_mm: f64,
+    pub cable_stiffness_n_mm2: f64,
     pub sensor_noise_fraction: f64,
 }
 
@@ -44,10 +44,12 @@ impl Perturbation {
                 low
             }
         };
+        let (offset_mm, angle_rad) = (ranges.start_offset_max_mm, ranges.start_angle_max_rad);
         Self {
-            start_offset_mm: ranges.start_offset_mm * rng.sample::<f64, _>(StandardNormal),
-            start_angle_rad: ranges.start_angle_rad * rng.sample::<f64, _>(StandardNormal),
+            start_offset_mm: uniform(&mut rng, [-offset_mm, offset_mm]),
+            start_angle_rad: uniform(&mut rng, [-angle_rad, angle_rad]),
             cable_diameter_mm: uniform(&mut rng, ranges.cable_diameter_mm),
+            cable_stiffness_n_mm2: uniform(&mut rng, ranges.cable_stiffness_n_mm2),
             sensor_noise_fraction: uniform(&mut rng, ranges.sensor_noise_fraction),
         }
     }
@@ -63,6 +65,7 @@ impl Perturbation {
         let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
         tactile.noise_fraction = self.sensor_noise_fraction;
         cell.world.cable_diameter_mm = self.cable_diameter_mm;
+        cell.world.bending_stiffness_n_mm2 = self.cable_stiffness_n_mm2;
         cell
     }
 }
@@ -114,6 +117,9 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
     if let Some(tolerance) = policy.tolerance {
         task.tolerance = tolerance;
     }
+    if let Some(gain) = policy.correction_gain {
+        task.regrasp.correction_gain = gain;
+    }
     for source in &policy.perfect {
         match source {
             ErrorSource::Estimator => task.tactile.estimator = Estimator::Oracle,
@@ -125,6 +131,7 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
                 let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
                 tactile.noise_fraction = 0.0;
             }
+            ErrorSource::SpringBack => cell.world.spring_back_fraction = 0.0,
         }
     }
     (task, cell)

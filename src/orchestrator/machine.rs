@@ -21,7 +21,7 @@ use statig::prelude::*;
 use super::command::{Command, Event};
 use super::plan::Plan;
 use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
-use crate::geometry::{LineInSensor, planar_to_spatial, t_corr};
+use crate::geometry::{LineInSensor, planar_to_spatial, t_corr_with_gain};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
@@ -350,7 +350,8 @@ impl GraspTask {
             context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
             Transition(State::done())
         } else if attempt < self.plan.max_regrasps {
-            let sensor_old_from_new = t_corr(&line, &self.plan.target);
+            let sensor_old_from_new =
+                t_corr_with_gain(&line, &self.plan.target, &self.plan.correction_gain);
             self.base_from_tcp_aim = self.base_from_tcp_grasped
                 * self.plan.tcp_from_sensor
                 * sensor_old_from_new
@@ -428,7 +429,7 @@ mod tests {
     use nalgebra::{Isometry2, Translation3, UnitQuaternion, Vector2, Vector3};
 
     use super::*;
-    use crate::geometry::{LineInSensor, PoseError};
+    use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
     use crate::hw::detector::CableDetection;
     use crate::hw::{DeviceError, DeviceKind};
     use crate::perception::tactile::{Estimator, FitConfig};
@@ -449,6 +450,7 @@ mod tests {
             grip_current_a: 1.0,
             max_regrasps,
             retreat_mm: 30.0,
+            correction_gain: CorrectionGain::PAPER,
             bias_frames: 50,
             average_frames: 4,
             fit: FitConfig {

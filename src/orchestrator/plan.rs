@@ -2,7 +2,7 @@
 
 use nalgebra::Isometry3;
 
-use crate::geometry::{LineInSensor, PoseError};
+use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::{Estimator, FitConfig};
 use crate::task::{CellFile, TaskFile};
 
@@ -16,6 +16,7 @@ pub struct Plan {
     pub grip_current_a: f64,
     pub max_regrasps: u32,
     pub retreat_mm: f64,
+    pub correction_gain: CorrectionGain,
     pub bias_frames: usize,
     pub average_frames: usize,
     pub fit: FitConfig,
@@ -35,6 +36,7 @@ impl Plan {
             grip_current_a: task.grasp.grip_current_a,
             max_regrasps: task.regrasp.max_regrasps,
             retreat_mm: task.regrasp.retreat_mm,
+            correction_gain: task.regrasp.correction_gain,
             bias_frames: task.tactile.bias_samples,
             average_frames: task.tactile.average_frames,
             fit: FitConfig {

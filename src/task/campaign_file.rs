@@ -8,6 +8,7 @@ use serde::{Deserialize, Deserializer, de::Error};
 use super::load::{ConfigError, parse, read};
 use super::task_file::Tolerance;
 use super::validate::{at_least_one, non_negative, non_negative_range};
+use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
@@ -48,16 +49,21 @@ fn paper_trials() -> usize {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Perturbations {
-    /// σ of the start grasp frame's offset across the cable (the paper's
-    /// "small random offset on the initial reference frame").
+    /// Largest offset of the start grasp frame across the cable, drawn
+    /// uniformly within ± (the paper's "small random offset on the initial
+    /// reference frame"; a uniform draw keeps every start within reach).
     #[serde(deserialize_with = "non_negative")]
-    pub start_offset_mm: f64,
-    /// σ of the start grasp frame's angle about the pad's normal.
+    pub start_offset_max_mm: f64,
+    /// Largest angle of the start grasp frame about the pad's normal,
+    /// likewise.
     #[serde(deserialize_with = "non_negative")]
-    pub start_angle_rad: f64,
+    pub start_angle_max_rad: f64,
     /// Range of the cable's diameter, drawn uniformly.
     #[serde(deserialize_with = "non_negative_range")]
     pub cable_diameter_mm: [f64; 2],
+    /// Range of the cable's bending stiffness EI, drawn uniformly.
+    #[serde(deserialize_with = "non_negative_range")]
+    pub cable_stiffness_n_mm2: [f64; 2],
     /// Range of the tactile noise (fraction of the taxels' swing).
     #[serde(deserialize_with = "non_negative_range")]
     pub sensor_noise_fraction: [f64; 2],
@@ -74,6 +80,9 @@ pub struct Policy {
     /// The tolerance it regrasps towards, if not the task's.
     #[serde(default)]
     pub tolerance: Option<Tolerance>,
+    /// How much of T_corr it applies, if not the task's.
+    #[serde(default)]
+    pub correction_gain: Option<CorrectionGain>,
     /// Error sources switched off for this policy, to show what each one
     /// costs (an error budget). Simulated cells only.
     #[serde(default)]
@@ -90,6 +99,8 @@ pub enum ErrorSource {
     Arm,
     /// The taxels' noise.
     SensorNoise,
+    /// The cable's spring-back when the jaws open.
+    SpringBack,
 }
 
 /// At least one policy, with distinct names.

@@ -3,7 +3,7 @@
 use serde::Deserialize;
 
 use super::validate::{at_least_one, finite, line_angle, positive};
-use crate::geometry::{LineInSensor, PoseError};
+use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::Estimator;
 
 /// A task file, e.g. `tasks/regrasp.toml`.
@@ -98,6 +98,14 @@ pub struct Regrasp {
     /// moving by T_corr, so that they do not drag the cable.
     #[serde(deserialize_with = "positive")]
     pub retreat_mm: f64,
+    /// How much of T_corr each regrasp applies (default: all of it, as the
+    /// paper does); above 1 it makes up for a cable that springs back.
+    #[serde(default = "paper_gain")]
+    pub correction_gain: CorrectionGain,
+}
+
+fn paper_gain() -> CorrectionGain {
+    CorrectionGain::PAPER
 }
 
 #[derive(Debug, Clone, Copy, Deserialize)]
