@@ -274,3 +274,52 @@ fn a_bad_campaign_file_says_what_and_where() {
         "{err}"
     );
 }
+
+#[test]
+fn a_trial_that_faults_is_recorded_and_the_campaign_goes_on() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // A cell whose tactile sensor falls silent during the first evaluation.
+    let cell = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell");
+    let cell = cell.replace(
+        "noise_fraction = 0.02",
+        "noise_fraction = 0.02\nsilent_after_frames = 55",
+    );
+    assert!(cell.contains("silent_after_frames = 55"));
+    std::fs::write(dir.path().join("cell.toml"), cell).expect("write cell");
+    let campaign = edited_campaign(dir.path(), "\"../config/cell.sim.toml\"", "\"cell.toml\"");
+    let out = dir.path().join("out");
+    let status = command(&[
+        path_str(&campaign),
+        "--trials",
+        "3",
+        "--out",
+        path_str(&out),
+    ])
+    .output()
+    .expect("runs");
+    assert_eq!(
+        status.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let entries = entries(&out);
+    assert_eq!(entries.len(), 6);
+    for entry in &entries {
+        assert_eq!(
+            entry.outcome,
+            cablecell::campaign::trial::TrialOutcome::Fault
+        );
+        assert!(
+            entry
+                .detail
+                .as_deref()
+                .is_some_and(|d| d.contains("no answer")),
+            "{entry:?}"
+        );
+        // What came before the fault is kept.
+        assert!(entry.states.iter().any(|(state, _)| state == "trial_grasp"));
+    }
+    let table = String::from_utf8_lossy(&status.stdout);
+    assert!(table.contains("faults                  3"), "{table}");
+}
