@@ -2,6 +2,7 @@
 //! the Schunk PG70 takes them.
 
 mod sim;
+pub mod smp;
 
 pub use sim::SimGripper;
 
