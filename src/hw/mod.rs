@@ -45,12 +45,22 @@ pub enum DeviceError {
         command: &'static str,
         reason: String,
     },
+    /// The link to the device failed (unplugged, powered off, port
+    /// closed): check the cable and that the port still exists.
+    #[error("{device} on {port}: link lost: {reason}")]
+    Disconnected {
+        device: DeviceKind,
+        port: String,
+        reason: String,
+    },
 }
 
 impl DeviceError {
     pub fn device(&self) -> DeviceKind {
         match self {
-            DeviceError::Timeout { device, .. } | DeviceError::Refused { device, .. } => *device,
+            DeviceError::Timeout { device, .. }
+            | DeviceError::Refused { device, .. }
+            | DeviceError::Disconnected { device, .. } => *device,
         }
     }
 }

@@ -5,6 +5,7 @@
 //! parameters: docs/simulated-cell.md.
 
 pub mod cable;
+pub mod emulator;
 pub mod motion;
 pub mod tactile_model;
 pub mod world;

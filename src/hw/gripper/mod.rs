@@ -1,9 +1,11 @@
 //! The parallel gripper: jaw opening in mm and grip by motor current, as
 //! the Schunk PG70 takes them.
 
+mod pg70;
 mod sim;
 pub mod smp;
 
+pub use pg70::Pg70;
 pub use sim::SimGripper;
 
 use serde::Serialize;

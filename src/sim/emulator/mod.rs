@@ -1,0 +1,5 @@
+//! Emulators of the cell's serial devices: they speak the devices' real
+//! protocols on a byte stream (a pseudo-terminal in the tests), and can
+//! misbehave on purpose, so that the real drivers are tested end to end.
+
+pub mod pg70;

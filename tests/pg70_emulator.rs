@@ -1,0 +1,132 @@
+//! The PG70 driver against the emulated module on a pseudo-terminal,
+//! including the module misbehaving and the port vanishing.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use cablecell::hw::DeviceError;
+use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
+use cablecell::sim::emulator::pg70::{Misbehaviour, Pg70Emulator};
+use serialport::{SerialPort, TTYPort};
+
+struct Bench {
+    driver: Pg70<TTYPort>,
+    stop: Arc<AtomicBool>,
+    emulator: Option<JoinHandle<()>>,
+}
+
+impl Bench {
+    fn new(misbehaviour: Misbehaviour, object_mm: Option<f32>) -> Self {
+        let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
+        master
+            .set_timeout(Duration::from_millis(5))
+            .expect("timeout");
+        slave
+            .set_timeout(Duration::from_millis(5))
+            .expect("timeout");
+        let stop = Arc::new(AtomicBool::new(false));
+        let serving = Arc::clone(&stop);
+        let emulator = std::thread::spawn(move || {
+            let mut module = Pg70Emulator::new(12);
+            module.object_mm = object_mm;
+            module.misbehaviour = misbehaviour;
+            module.serve(master, &serving);
+        });
+        let name = slave.name().unwrap_or_else(|| "pty".into());
+        Self {
+            driver: Pg70::new(slave, &name, 12),
+            stop,
+            emulator: Some(emulator),
+        }
+    }
+
+    /// Closes the emulator's end: the device is unplugged.
+    fn unplug(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(emulator) = self.emulator.take() {
+            emulator.join().expect("emulator thread");
+        }
+    }
+}
+
+impl Drop for Bench {
+    fn drop(&mut self) {
+        self.unplug();
+    }
+}
+
+#[test]
+fn a_grasp_refuses_moves_before_referencing_then_holds_the_cable() {
+    let mut bench = Bench::new(Misbehaviour::None, Some(2.5));
+    match bench.driver.move_to(20.0) {
+        Err(DeviceError::Refused { reason, .. }) => {
+            assert!(reason.contains("0x06: not referenced"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    bench.driver.reference().expect("reference");
+    bench.driver.move_to(20.0).expect("open");
+    match bench.driver.grip(1.0).expect("grip") {
+        GripOutcome::Holding { opening_mm } => assert!((opening_mm - 2.5).abs() < 1e-6),
+        GripOutcome::Empty => panic!("the cable was between the jaws"),
+    }
+    bench.driver.move_to(20.0).expect("release");
+    bench.driver.stop().expect("stop");
+}
+
+#[test]
+fn closing_on_nothing_is_an_empty_grip() {
+    let mut bench = Bench::new(Misbehaviour::None, None);
+    bench.driver.reference().expect("reference");
+    bench.driver.move_to(20.0).expect("open");
+    assert_eq!(bench.driver.grip(1.0).expect("grip"), GripOutcome::Empty);
+}
+
+#[test]
+fn a_move_beyond_the_stroke_is_refused_with_its_meaning() {
+    let mut bench = Bench::new(Misbehaviour::None, None);
+    bench.driver.reference().expect("reference");
+    match bench.driver.move_to(90.0) {
+        Err(DeviceError::Refused { reason, .. }) => {
+            assert!(reason.contains("soft limit high"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn garbage_on_the_line_is_skipped() {
+    let mut bench = Bench::new(Misbehaviour::GarbageFirst, Some(3.0));
+    bench.driver.reference().expect("reference through garbage");
+    bench.driver.move_to(20.0).expect("open through garbage");
+    assert!(matches!(
+        bench.driver.grip(1.0),
+        Ok(GripOutcome::Holding { .. })
+    ));
+}
+
+#[test]
+fn silence_and_bad_crcs_time_out() {
+    for misbehaviour in [Misbehaviour::Silent, Misbehaviour::BadCrc] {
+        let mut bench = Bench::new(misbehaviour, None);
+        match bench.driver.reference() {
+            Err(DeviceError::Timeout { waited_ms, .. }) => assert_eq!(waited_ms, 500),
+            other => panic!("{misbehaviour:?}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn an_unplugged_module_is_a_lost_link_that_names_the_port() {
+    let mut bench = Bench::new(Misbehaviour::None, None);
+    bench.driver.reference().expect("reference");
+    bench.unplug();
+    match bench.driver.move_to(10.0) {
+        Err(DeviceError::Disconnected { port, .. }) => {
+            assert!(port.starts_with("/dev/pts/"), "{port}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
