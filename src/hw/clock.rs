@@ -6,6 +6,31 @@ pub trait Clock: Send {
     fn now_s(&self) -> f64;
 }
 
+/// A real cell's clock: seconds since it was made.
+pub struct MonotonicClock {
+    start: std::time::Instant,
+}
+
+impl MonotonicClock {
+    pub fn new() -> Self {
+        Self {
+            start: std::time::Instant::now(),
+        }
+    }
+}
+
+impl Default for MonotonicClock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Clock for MonotonicClock {
+    fn now_s(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
 /// The simulated world's clock, advanced by the simulated devices.
 pub struct SimClock {
     world: crate::sim::world::SharedWorld,

@@ -53,6 +53,14 @@ pub enum DeviceError {
         port: String,
         reason: String,
     },
+    /// The device's answer cannot be what it sent (noise on the line, a
+    /// wrong baud rate): the request may be repeated.
+    #[error("{device} on {port}: garbled answer: {detail}")]
+    Garbled {
+        device: DeviceKind,
+        port: String,
+        detail: String,
+    },
 }
 
 impl DeviceError {
@@ -60,7 +68,8 @@ impl DeviceError {
         match self {
             DeviceError::Timeout { device, .. }
             | DeviceError::Refused { device, .. }
-            | DeviceError::Disconnected { device, .. } => *device,
+            | DeviceError::Disconnected { device, .. }
+            | DeviceError::Garbled { device, .. } => *device,
         }
     }
 }

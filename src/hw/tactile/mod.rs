@@ -1,8 +1,10 @@
 //! The tactile pad: raw 12-bit readings of its 25 taxels, polled at the
 //! sensor's rate (500 Hz in the paper).
 
+mod remodel;
 mod sim;
 
+pub use remodel::{RemodelTactile, SerialLink};
 pub use sim::SimTactile;
 
 use crate::perception::tactile::RawFrame;

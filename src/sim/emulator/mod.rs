@@ -3,3 +3,4 @@
 //! misbehave on purpose, so that the real drivers are tested end to end.
 
 pub mod pg70;
+pub mod tactile;

@@ -1,0 +1,130 @@
+//! The tactile driver against the emulated microcontroller on a
+//! pseudo-terminal: the taxel layout, 12-bit samples, and the sensor
+//! misbehaving or unplugged.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use cablecell::hw::DeviceError;
+use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::tactile::{RemodelTactile, TactileSensor};
+use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
+use cablecell::sim::emulator::tactile::{Misbehaviour, TactileEmulator};
+use serialport::{SerialPort, TTYPort};
+
+/// A layout that is not the identity: channel = 24 − taxel.
+fn reversed() -> [usize; TAXEL_COUNT] {
+    std::array::from_fn(|taxel| TAXEL_COUNT - 1 - taxel)
+}
+
+/// Frame n: taxel k reads 0x0F0 + 100·k + n, up to the 12-bit maximum.
+fn frame(n: u16) -> RawFrame {
+    std::array::from_fn(|k| (0x0F0 + 100 * k as u16 + n).min(4095))
+}
+
+struct Bench {
+    driver: RemodelTactile<TTYPort>,
+    stop: Arc<AtomicBool>,
+    emulator: Option<JoinHandle<()>>,
+}
+
+impl Bench {
+    fn new(misbehaviour: Misbehaviour) -> Self {
+        let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
+        master
+            .set_timeout(Duration::from_millis(2))
+            .expect("timeout");
+        slave
+            .set_timeout(Duration::from_millis(2))
+            .expect("timeout");
+        let stop = Arc::new(AtomicBool::new(false));
+        let serving = Arc::clone(&stop);
+        let emulator = std::thread::spawn(move || {
+            let mut n = 0;
+            let mut mcu = TactileEmulator::new(reversed(), move || {
+                n += 1;
+                frame(n)
+            });
+            mcu.misbehaviour = misbehaviour;
+            mcu.serve(master, &serving);
+        });
+        let name = slave.name().unwrap_or_else(|| "pty".into());
+        let driver = RemodelTactile::new(slave, &name, reversed(), Box::new(MonotonicClock::new()));
+        Self {
+            driver,
+            stop,
+            emulator: Some(emulator),
+        }
+    }
+
+    fn unplug(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(emulator) = self.emulator.take() {
+            emulator.join().expect("emulator thread");
+        }
+    }
+}
+
+impl Drop for Bench {
+    fn drop(&mut self) {
+        self.unplug();
+    }
+}
+
+#[test]
+fn id_count_and_samples_in_taxel_order() {
+    let mut bench = Bench::new(Misbehaviour::None);
+    assert_eq!(bench.driver.id().expect("id"), "F001");
+    assert_eq!(bench.driver.count().expect("count"), 25);
+    let first = bench.driver.read().expect("sample");
+    assert_eq!(first.raw, frame(1));
+    let second = bench.driver.read().expect("sample");
+    assert_eq!(second.raw, frame(2));
+    assert!(second.t_s >= first.t_s);
+    assert_eq!(first.raw[24], 0x0F0 + 2400 + 1, "12-bit values above 255 survive");
+}
+
+#[test]
+fn a_truncated_answer_times_out() {
+    let mut bench = Bench::new(Misbehaviour::Truncated);
+    match bench.driver.read() {
+        Err(DeviceError::Timeout { waited_ms, .. }) => assert_eq!(waited_ms, 20),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_sensor_that_falls_silent_times_out_and_earlier_samples_were_fine() {
+    let mut bench = Bench::new(Misbehaviour::SilentAfter(3));
+    for n in 1..=3 {
+        assert_eq!(bench.driver.read().expect("sample").raw, frame(n));
+    }
+    assert!(matches!(
+        bench.driver.read(),
+        Err(DeviceError::Timeout { .. })
+    ));
+}
+
+#[test]
+fn a_stray_byte_is_caught_as_a_garbled_answer() {
+    let mut bench = Bench::new(Misbehaviour::StrayByte);
+    match bench.driver.read() {
+        Err(DeviceError::Garbled { detail, .. }) => {
+            assert!(detail.contains("not 12-bit"), "{detail}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn an_unplugged_sensor_is_a_lost_link() {
+    let mut bench = Bench::new(Misbehaviour::None);
+    bench.driver.read().expect("sample");
+    bench.unplug();
+    assert!(matches!(
+        bench.driver.read(),
+        Err(DeviceError::Disconnected { .. })
+    ));
+}
