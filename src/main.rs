@@ -13,7 +13,8 @@ use clap::{Parser, Subcommand};
 /// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
 /// the allowed regrasps, no cable on the pad); 2 bad input (command line,
 /// task, cell, campaign or map file); 3 device fault (the cell was made
-/// safe); 4 the output (a campaign's journal) could not be written or read.
+/// safe, or a bring-up command's device failed); 4 the output (a campaign's
+/// journal) could not be written or read.
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Args {
@@ -63,6 +64,24 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Talk to one device and print what it answered: the first thing to
+    /// run when bringing up a cell.
+    Device {
+        #[command(subcommand)]
+        device: DeviceCommand,
+    },
+    /// Serve an emulated device on a new pseudo-terminal, whose path is
+    /// printed, until stopped.
+    Emulate {
+        #[arg(value_enum)]
+        device: cli::emulate::Emulated,
+        /// The PG70's module id.
+        #[arg(long, default_value_t = 12)]
+        id: u8,
+        /// The cell file whose simulated pad the tactile emulator uses.
+        #[arg(long, default_value = "config/cell.sim.toml")]
+        cell: PathBuf,
+    },
     /// Validate task, cell and campaign files without running them.
     Check {
         #[arg(required = true)]
@@ -80,6 +99,32 @@ enum Command {
         /// Peak Δv below which the pad touches nothing.
         #[arg(long, default_value_t = 0.05)]
         contact_threshold_v: f64,
+    },
+}
+
+#[derive(Subcommand)]
+enum DeviceCommand {
+    /// The Schunk PG70 over SMP.
+    Gripper {
+        /// The serial port, e.g. /dev/ttyUSB0.
+        #[arg(long)]
+        port: String,
+        #[arg(long, default_value_t = 9600)]
+        baud: u32,
+        /// The module id set in the gripper.
+        #[arg(long, default_value_t = 12)]
+        id: u8,
+        #[command(subcommand)]
+        action: cli::device::GripperAction,
+    },
+    /// The tactile finger's microcontroller.
+    Tactile {
+        #[arg(long)]
+        port: String,
+        #[arg(long, default_value_t = 1_000_000)]
+        baud: u32,
+        #[command(subcommand)]
+        action: cli::device::TactileAction,
     },
 }
 
@@ -110,6 +155,18 @@ fn main() -> ExitCode {
             });
             cli::campaign::campaign(&file, overrides, resume, json, threads)
         }
+        Command::Device { device } => match device {
+            DeviceCommand::Gripper {
+                port,
+                baud,
+                id,
+                action,
+            } => cli::device::gripper(&port, baud, id, &action),
+            DeviceCommand::Tactile { port, baud, action } => {
+                cli::device::tactile(&port, baud, &action)
+            }
+        },
+        Command::Emulate { device, id, cell } => cli::emulate::emulate(device, id, &cell),
         Command::Check { files } => cli::check::check(&files),
         Command::TactileFit {
             file,

@@ -3,6 +3,8 @@
 
 pub mod campaign;
 pub mod check;
+pub mod device;
+pub mod emulate;
 pub mod run;
 pub mod tactile_fit;
 

@@ -34,6 +34,18 @@ impl<T: Read + Write + Send> Pg70<T> {
         }
     }
 
+    /// The module's state once: position, velocity, current, state bits
+    /// and error code.
+    pub fn state(&mut self) -> Result<Reply, DeviceError> {
+        self.request(smp::get_state(self.module_id, 0.0, 0x07), "state")
+    }
+
+    /// Acknowledges an error, so that the module moves again.
+    pub fn acknowledge(&mut self) -> Result<(), DeviceError> {
+        self.request(smp::simple(self.module_id, command::CMD_ACK), "acknowledge")
+            .map(|_| ())
+    }
+
     /// Sends `frame` and returns the module's answer to it; spontaneous
     /// error messages end the wait as a refusal.
     fn request(&mut self, frame: Frame, name: &'static str) -> Result<Reply, DeviceError> {

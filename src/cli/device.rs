@@ -1,0 +1,191 @@
+//! `cablecell device gripper|tactile --port PATH ...`: bring-up commands
+//! that talk to one device and print what it answered.
+
+use std::time::{Duration, Instant};
+
+use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::gripper::smp::{Reply, state_bits};
+use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
+use cablecell::hw::tactile::RemodelTactile;
+use cablecell::perception::tactile::{BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame, raw_to_volts};
+use clap::Subcommand;
+use serialport::TTYPort;
+
+use super::Status;
+
+#[derive(Subcommand, Debug)]
+pub enum GripperAction {
+    /// The module's state: position, velocity, current, state bits, error.
+    State,
+    /// Home the jaws (moves are refused until this is done).
+    Reference,
+    /// Move the jaws to an opening.
+    MovePos {
+        opening_mm: f64,
+    },
+    /// Close with a motor current until blocked.
+    Grip {
+        current_a: f64,
+    },
+    Stop,
+    /// Acknowledge an error.
+    Ack,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum TactileAction {
+    /// The sensor's id (F… for a tactile pad).
+    Id,
+    /// The number of taxels.
+    Count,
+    /// Read samples: the raw map, the bias-removed map, the sample rate.
+    Read {
+        #[arg(long, default_value_t = 100)]
+        samples: usize,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn open(port: &str, baud: u32) -> Result<TTYPort, String> {
+    serialport::new(port, baud)
+        .timeout(Duration::from_millis(5))
+        .open_native()
+        .map_err(|e| format!("{port}: cannot open the port: {e}"))
+}
+
+pub fn gripper(port: &str, baud: u32, module_id: u8, action: &GripperAction) -> Status {
+    let link = match open(port, baud) {
+        Ok(link) => link,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    let mut pg70 = Pg70::new(link, port, module_id);
+    let result = match action {
+        GripperAction::State => pg70.state().map(|reply| describe_state(&reply)),
+        GripperAction::Reference => pg70.reference().map(|()| "referenced".into()),
+        GripperAction::MovePos { opening_mm } => pg70
+            .move_to(*opening_mm)
+            .map(|()| format!("at {opening_mm} mm")),
+        GripperAction::Grip { current_a } => pg70.grip(*current_a).map(|outcome| match outcome {
+            GripOutcome::Holding { opening_mm } => {
+                format!("holding an object at {opening_mm:.2} mm")
+            }
+            GripOutcome::Empty => "closed on nothing".into(),
+        }),
+        GripperAction::Stop => pg70.stop().map(|()| "stopped".into()),
+        GripperAction::Ack => pg70.acknowledge().map(|()| "error acknowledged".into()),
+    };
+    report(result)
+}
+
+fn describe_state(reply: &Reply) -> String {
+    match reply {
+        Reply::State {
+            position_mm,
+            velocity_mm_s,
+            current_a,
+            state,
+            error,
+        } => {
+            let flags: Vec<&str> = [
+                (state_bits::REFERENCED, "referenced"),
+                (state_bits::MOVING, "moving"),
+                (state_bits::ERROR, "error"),
+                (state_bits::MOVE_BLOCKED, "blocked"),
+                (state_bits::POSITION_REACHED, "position reached"),
+            ]
+            .iter()
+            .filter(|(bit, _)| state & bit != 0)
+            .map(|(_, name)| *name)
+            .collect();
+            format!(
+                "position {position_mm:.3} mm, velocity {}, current {}, state 0x{state:02X} [{}], error 0x{error:02X}",
+                velocity_mm_s.map_or("—".into(), |v| format!("{v:.3} mm/s")),
+                current_a.map_or("—".into(), |c| format!("{c:.3} A")),
+                flags.join(", ")
+            )
+        }
+        other => format!("{other:?}"),
+    }
+}
+
+pub fn tactile(port: &str, baud: u32, action: &TactileAction) -> Status {
+    let link = match open(port, baud) {
+        Ok(link) => link,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    let identity = std::array::from_fn(|k| k);
+    let mut sensor = RemodelTactile::new(link, port, identity, Box::new(MonotonicClock::new()));
+    let result = match action {
+        TactileAction::Id => sensor.id(),
+        TactileAction::Count => sensor.count().map(|n| n.to_string()),
+        TactileAction::Read { samples, json } => read(&mut sensor, (*samples).max(1), *json),
+    };
+    report(result)
+}
+
+fn read(
+    sensor: &mut RemodelTactile<TTYPort>,
+    samples: usize,
+    json: bool,
+) -> Result<String, cablecell::hw::DeviceError> {
+    let started = Instant::now();
+    let frames: Vec<RawFrame> = (0..samples)
+        .map(|_| sensor.sample())
+        .collect::<Result<_, _>>()?;
+    let rate_hz = samples as f64 / started.elapsed().as_secs_f64();
+    let mut estimator = BiasEstimator::new(PAPER_BIAS_SAMPLES.min(samples));
+    let bias = frames.iter().find_map(|f| estimator.push(f));
+    let last = frames[frames.len() - 1];
+    let raw_v: Vec<f64> = last.iter().map(|&r| raw_to_volts(r)).collect();
+    let dv_v = bias.map(|b| b.remove(&last).dv_v);
+    if json {
+        let value = serde_json::json!({ "samples": samples, "rate_hz": rate_hz, "raw_v": raw_v, "dv_v": dv_v });
+        return Ok(value.to_string());
+    }
+    let mut text = format!("{samples} samples at {rate_hz:.0} Hz\nraw (V), last sample:\n");
+    for row in raw_v.chunks(5) {
+        text += &format!(
+            "  {}\n",
+            row.iter()
+                .map(|v| format!("{v:6.3}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    if let Some(dv) = dv_v {
+        text += &format!(
+            "Δv (V), bias from the first {} samples:\n",
+            PAPER_BIAS_SAMPLES.min(samples)
+        );
+        for row in dv {
+            text += &format!(
+                "  {}\n",
+                row.iter()
+                    .map(|v| format!("{v:+6.3}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            );
+        }
+    }
+    Ok(text.trim_end().to_owned())
+}
+
+fn report(result: Result<String, cablecell::hw::DeviceError>) -> Status {
+    match result {
+        Ok(text) => {
+            println!("{text}");
+            Status::Success
+        }
+        Err(error) => {
+            eprintln!("error: {error}");
+            Status::DeviceFault
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! `cablecell emulate` and `cablecell device` together, as an integrator
+//! would try them: the emulator prints its port, the bring-up commands talk
+//! to it.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+
+fn cablecell() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
+    command.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")));
+    command
+}
+
+/// An emulator process and the port it serves; killed when dropped.
+struct Emulator {
+    child: Child,
+    port: String,
+}
+
+impl Emulator {
+    fn start(device: &str) -> Self {
+        let mut child = cablecell()
+            .args(["emulate", device])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("emulator starts");
+        let stdout = child.stdout.take().expect("stdout");
+        let mut port = String::new();
+        BufReader::new(stdout)
+            .read_line(&mut port)
+            .expect("the port's path");
+        let port = port.trim().to_owned();
+        assert!(port.starts_with("/dev/pts/"), "{port}");
+        Self { child, port }
+    }
+
+    fn device(&self, args: &[&str]) -> Output {
+        let (kind, rest) = args.split_first().expect("device kind");
+        cablecell()
+            .args(["device", kind, "--port", &self.port])
+            .args(rest)
+            .output()
+            .expect("device command runs")
+    }
+}
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+#[test]
+fn the_gripper_bring_up_commands_talk_to_the_emulated_pg70() {
+    let emulator = Emulator::start("pg70");
+    let refused = emulator.device(&["gripper", "move-pos", "20"]);
+    assert_eq!(refused.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not referenced"));
+    let referenced = emulator.device(&["gripper", "reference"]);
+    assert_eq!(
+        referenced.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&referenced.stderr)
+    );
+    assert_eq!(stdout(&referenced).trim(), "referenced");
+    assert_eq!(
+        emulator
+            .device(&["gripper", "move-pos", "20"])
+            .status
+            .code(),
+        Some(0)
+    );
+    let state = emulator.device(&["gripper", "state"]);
+    assert!(
+        stdout(&state).contains("position 20.000 mm"),
+        "{}",
+        stdout(&state)
+    );
+    assert!(stdout(&state).contains("referenced"));
+    assert_eq!(
+        stdout(&emulator.device(&["gripper", "grip", "1.0"])).trim(),
+        "closed on nothing"
+    );
+}
+
+#[test]
+fn the_tactile_bring_up_commands_read_the_emulated_pad() {
+    let emulator = Emulator::start("tactile");
+    assert_eq!(stdout(&emulator.device(&["tactile", "id"])).trim(), "F001");
+    assert_eq!(stdout(&emulator.device(&["tactile", "count"])).trim(), "25");
+    let read = emulator.device(&["tactile", "read", "--samples", "60", "--json"]);
+    assert_eq!(
+        read.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&read.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&read.stdout).expect("JSON");
+    assert_eq!(report["samples"], 60);
+    assert!(report["rate_hz"].as_f64().expect("rate") > 100.0);
+    // The emulated cable lies across the middle row: the bias-removed
+    // map is near zero, the raw map is not.
+    let dv = report["dv_v"].as_array().expect("Δv rows");
+    assert!(
+        dv.iter()
+            .flat_map(|r| r.as_array().expect("row"))
+            .all(|v| v.as_f64().expect("Δv").abs() < 0.2)
+    );
+    assert!(report["raw_v"][12].as_f64().expect("centre taxel") > 0.5);
+}
+
+#[test]
+fn a_missing_port_is_named() {
+    let out = cablecell()
+        .args(["device", "gripper", "--port", "/dev/no-such-port", "state"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("/dev/no-such-port: cannot open the port")
+    );
+}
