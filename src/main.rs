@@ -64,6 +64,33 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Find every cable in images: its B-spline, the grasp point at s = 0.5
+    /// and the cable's direction there, and the time spent in each stage.
+    Detect {
+        #[arg(required = true)]
+        images: Vec<PathBuf>,
+        #[command(flatten)]
+        vision: cli::vision_io::VisionArgs,
+        /// Print one JSON array of reports.
+        #[arg(long)]
+        json: bool,
+        /// Write each cable's mask (NAME_mask_K.png) and their union
+        /// (NAME_mask_all.png) here.
+        #[arg(long)]
+        masks: Option<PathBuf>,
+        /// Write each image with its splines and grasp frames drawn here.
+        #[arg(long)]
+        overlay: Option<PathBuf>,
+    },
+    /// Score the vision pipeline on a folder laid out like cables-dev
+    /// (NNNNN.jpg, NNNNN_mask_K.png, NNNNN_mask_all.png, NNNNN.txt).
+    EvalVision {
+        dir: PathBuf,
+        #[command(flatten)]
+        vision: cli::vision_io::VisionArgs,
+        #[arg(long)]
+        json: bool,
+    },
     /// Talk to one device and print what it answered: the first thing to
     /// run when bringing up a cell.
     Device {
@@ -154,6 +181,16 @@ fn main() -> ExitCode {
                 std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
             });
             cli::campaign::campaign(&file, overrides, resume, json, threads)
+        }
+        Command::Detect {
+            images,
+            vision,
+            json,
+            masks,
+            overlay,
+        } => cli::detect::detect(&images, &vision, json, masks.as_deref(), overlay.as_deref()),
+        Command::EvalVision { dir, vision, json } => {
+            cli::eval_vision::eval_vision(&dir, &vision, json)
         }
         Command::Device { device } => match device {
             DeviceCommand::Gripper {

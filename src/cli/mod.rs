@@ -3,10 +3,13 @@
 
 pub mod campaign;
 pub mod check;
+pub mod detect;
 pub mod device;
 pub mod emulate;
+pub mod eval_vision;
 pub mod run;
 pub mod tactile_fit;
+pub mod vision_io;
 
 use std::process::ExitCode;
 

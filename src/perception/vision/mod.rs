@@ -2,3 +2,22 @@
 //! the cables (a classical threshold on a plain background, else the
 //! segmentation network), one instance per cable, a B-spline along each,
 //! and the grasp frame at its middle.
+
+pub mod error;
+pub mod eval;
+pub mod mask;
+pub mod network;
+pub mod pipeline;
+pub mod skeleton;
+pub mod spline;
+pub mod superpixels;
+pub mod synthetic;
+
+pub use error::VisionError;
+pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};
+pub use mask::BackgroundStats;
+pub use pipeline::{
+    CableInstance, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork, Pipeline, VisionConfig,
+    VisionOutput,
+};
+pub use spline::BSpline;

@@ -1,0 +1,218 @@
+//! `cablecell detect IMAGE...`
+
+use std::path::{Path, PathBuf};
+
+use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
+use opencv::core::{Mat, Point, Scalar, Vector};
+use opencv::imgcodecs;
+use opencv::imgproc;
+use serde::Serialize;
+
+use super::Status;
+use super::vision_io::{VisionArgs, read_image};
+
+/// What `detect --json` prints per image.
+#[derive(Serialize)]
+struct ImageReport<'a> {
+    image: String,
+    mask_used: cablecell::perception::vision::MaskMethod,
+    plain_background: bool,
+    cables: &'a [CableInstance],
+    timings_ms: Vec<(&'static str, f64)>,
+    total_ms: f64,
+    notes: &'a [String],
+}
+
+pub fn detect(
+    images: &[PathBuf],
+    args: &VisionArgs,
+    json: bool,
+    masks: Option<&Path>,
+    overlay: Option<&Path>,
+) -> Status {
+    let mut pipeline = args.pipeline();
+    let mut network = args.network();
+    let mut reports = Vec::new();
+    let mut status = Status::Success;
+    for path in images {
+        let image = match read_image(path) {
+            Ok(image) => image,
+            Err(error) => {
+                eprintln!("error: {error}");
+                status = Status::BadInput;
+                continue;
+            }
+        };
+        let output = match pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork)) {
+            Ok(output) => output,
+            Err(error) => {
+                eprintln!("error: {}: {error}", path.display());
+                status = Status::TaskFailed;
+                continue;
+            }
+        };
+        let stem = path
+            .file_stem()
+            .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+        if let Err(error) = write_outputs(&stem, &image, &output, masks, overlay) {
+            eprintln!("error: {error}");
+            status = Status::OutputFailed;
+        }
+        let report = ImageReport {
+            image: path.display().to_string(),
+            mask_used: output.mask_used,
+            plain_background: output.plain_background,
+            cables: &output.cables,
+            timings_ms: output.timings_ms.clone(),
+            total_ms: output.timings_ms.iter().map(|(_, ms)| ms).sum(),
+            notes: &output.notes,
+        };
+        if json {
+            match serde_json::to_value(&report) {
+                Ok(value) => reports.push(value),
+                Err(error) => eprintln!("error: cannot write the report as JSON: {error}"),
+            }
+        } else {
+            print_report(&report);
+        }
+    }
+    if json {
+        match serde_json::to_string_pretty(&reports) {
+            Ok(text) => println!("{text}"),
+            Err(error) => eprintln!("error: cannot write the report as JSON: {error}"),
+        }
+    }
+    status
+}
+
+fn print_report(report: &ImageReport) {
+    let stages: Vec<String> = report
+        .timings_ms
+        .iter()
+        .map(|(stage, ms)| format!("{stage} {ms:.1}"))
+        .collect();
+    println!(
+        "{}: {} cable(s), {:?} mask{}, {:.1} ms ({} ms)",
+        report.image,
+        report.cables.len(),
+        report.mask_used,
+        if report.plain_background {
+            " (plain background)"
+        } else {
+            ""
+        },
+        report.total_ms,
+        stages.join(", ")
+    );
+    for (k, cable) in report.cables.iter().enumerate() {
+        println!(
+            "  cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {} control points",
+            cable.grasp_px[0],
+            cable.grasp_px[1],
+            cable.direction_rad,
+            cable.spline.control_points_px.len()
+        );
+    }
+    for note in report.notes {
+        println!("  note: {note}");
+    }
+}
+
+fn write_outputs(
+    stem: &str,
+    image: &Mat,
+    output: &VisionOutput,
+    masks: Option<&Path>,
+    overlay: Option<&Path>,
+) -> Result<(), String> {
+    if let Some(dir) = masks {
+        create_dir(dir)?;
+        for (k, cable) in output.cables.iter().enumerate() {
+            write_png(&dir.join(format!("{stem}_mask_{k}.png")), &cable.mask)?;
+        }
+        write_png(
+            &dir.join(format!("{stem}_mask_all.png")),
+            &output.union_mask,
+        )?;
+    }
+    if let Some(dir) = overlay {
+        create_dir(dir)?;
+        let drawn = draw_overlay(image, output)
+            .map_err(|e| format!("cannot draw the overlay of {stem}: {e}"))?;
+        write_png(&dir.join(format!("{stem}.png")), &drawn)?;
+    }
+    Ok(())
+}
+
+fn create_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("{}: cannot create the folder: {e}", dir.display()))
+}
+
+fn write_png(path: &Path, image: &Mat) -> Result<(), String> {
+    let name = path.display().to_string();
+    match imgcodecs::imwrite(&name, image, &Vector::new()) {
+        Ok(true) => Ok(()),
+        Ok(false) => Err(format!("{name}: OpenCV could not write the image")),
+        Err(e) => Err(format!("{name}: {e}")),
+    }
+}
+
+/// The image with each cable's spline, grasp point and grasp frame's x
+/// axis drawn on it.
+fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
+    const COLOURS: [(f64, f64, f64); 6] = [
+        (0.0, 255.0, 255.0),
+        (255.0, 0.0, 255.0),
+        (255.0, 255.0, 0.0),
+        (0.0, 128.0, 255.0),
+        (255.0, 128.0, 0.0),
+        (128.0, 255.0, 0.0),
+    ];
+    let mut drawn = image.clone();
+    for (k, cable) in output.cables.iter().enumerate() {
+        let (b, g, r) = COLOURS[k % COLOURS.len()];
+        let colour = Scalar::new(b, g, r, 0.0);
+        let points: Vector<Point> = cable
+            .samples_px
+            .iter()
+            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+            .collect();
+        let mut curves = Vector::<Vector<Point>>::new();
+        curves.push(points);
+        imgproc::polylines(&mut drawn, &curves, false, colour, 2, imgproc::LINE_AA, 0)?;
+        let grasp = Point::new(
+            cable.grasp_px[0].round() as i32,
+            cable.grasp_px[1].round() as i32,
+        );
+        imgproc::circle(&mut drawn, grasp, 5, colour, -1, imgproc::LINE_AA, 0)?;
+        let (dx, dy) = (
+            cable.direction_rad.cos() * 40.0,
+            cable.direction_rad.sin() * 40.0,
+        );
+        let tip = Point::new(grasp.x + dx.round() as i32, grasp.y + dy.round() as i32);
+        imgproc::arrowed_line(
+            &mut drawn,
+            grasp,
+            tip,
+            Scalar::new(0.0, 0.0, 255.0, 0.0),
+            2,
+            imgproc::LINE_AA,
+            0,
+            0.25,
+        )?;
+        // The frame's y axis: normal to the cable in the image plane.
+        let normal = Point::new(grasp.x - dy.round() as i32, grasp.y + dx.round() as i32);
+        imgproc::arrowed_line(
+            &mut drawn,
+            grasp,
+            normal,
+            Scalar::new(0.0, 255.0, 0.0, 0.0),
+            2,
+            imgproc::LINE_AA,
+            0,
+            0.25,
+        )?;
+    }
+    Ok(drawn)
+}

@@ -1,0 +1,328 @@
+//! Scoring the pipeline against ground truth laid out as in the Cables
+//! Dataset (De Gregorio et al., arXiv 1810.04461): per image `STEM`, one
+//! mask per cable (`STEM_mask_K.png`), their union (`STEM_mask_all.png`)
+//! and each cable's polyline (`STEM.txt`, line K: `N x0 y0 x1 y1 ...`).
+//!
+//! The truth masks were drawn along the polylines at one width, so their
+//! edges are approximate: the scores compare centrelines and counts as
+//! well as pixel overlap.
+
+use std::path::{Path, PathBuf};
+
+use opencv::core::{self, Mat};
+use opencv::imgcodecs;
+use opencv::prelude::*;
+
+use super::error::{VisionError, cv};
+use super::pipeline::{CableInstance, VisionOutput};
+
+/// One image's ground truth.
+#[derive(Debug)]
+pub struct GroundTruth {
+    /// One CV_8U 0/255 mask per cable, the image's size.
+    pub masks: Vec<Mat>,
+    /// The union of the cables' masks.
+    pub union_mask: Mat,
+    /// Each cable's centreline, in pixels (x right, y down).
+    pub polylines_px: Vec<Vec<[f64; 2]>>,
+}
+
+fn read_mask(path: &Path) -> Result<Mat, VisionError> {
+    let read_error = |reason: String| VisionError::ReadImage {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let text = path
+        .to_str()
+        .ok_or_else(|| read_error("path is not UTF-8".into()))?;
+    let m = imgcodecs::imread(text, imgcodecs::IMREAD_GRAYSCALE)
+        .map_err(|e| read_error(e.to_string()))?;
+    if m.empty() {
+        return Err(read_error("missing or not a decodable image".into()));
+    }
+    let mut binary = Mat::default();
+    opencv::imgproc::threshold(
+        &m,
+        &mut binary,
+        127.0,
+        255.0,
+        opencv::imgproc::THRESH_BINARY,
+    )
+    .map_err(cv("binarize truth mask"))?;
+    Ok(binary)
+}
+
+/// Parses one annotation line: `N x0 y0 ... x(N-1) y(N-1)`.
+fn parse_polyline(path: &Path, line_no: usize, line: &str) -> Result<Vec<[f64; 2]>, VisionError> {
+    let bad = |reason: String| VisionError::BadAnnotation {
+        path: path.to_path_buf(),
+        line: line_no,
+        reason,
+    };
+    let mut numbers = Vec::new();
+    for word in line.split_whitespace() {
+        let v: f64 = word
+            .parse()
+            .map_err(|_| bad(format!("`{word}` is not a number")))?;
+        numbers.push(v);
+    }
+    let Some((&count, coords)) = numbers.split_first() else {
+        return Err(bad("empty line".into()));
+    };
+    if count < 0.0 || count.fract() != 0.0 || coords.len() != 2 * count as usize {
+        return Err(bad(format!(
+            "says {count} points but holds {} coordinates",
+            coords.len()
+        )));
+    }
+    Ok(coords.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+}
+
+impl GroundTruth {
+    /// Reads `STEM_mask_K.png` (K = 0, 1, ... while they exist),
+    /// `STEM_mask_all.png` (or the masks' union when it is absent) and
+    /// `STEM.txt` from `dir`.
+    pub fn load(dir: &Path, stem: &str) -> Result<GroundTruth, VisionError> {
+        let mut masks = Vec::new();
+        loop {
+            let path = dir.join(format!("{stem}_mask_{}.png", masks.len()));
+            if !path.exists() {
+                break;
+            }
+            masks.push(read_mask(&path)?);
+        }
+        if masks.is_empty() {
+            return Err(VisionError::NoTruthMasks {
+                dir: dir.to_path_buf(),
+                stem: stem.to_string(),
+            });
+        }
+        let all_path = dir.join(format!("{stem}_mask_all.png"));
+        let union_mask = if all_path.exists() {
+            read_mask(&all_path)?
+        } else {
+            let mut union = masks[0].try_clone().map_err(cv("copy truth mask"))?;
+            for m in &masks[1..] {
+                let mut next = Mat::default();
+                core::bitwise_or(&union, m, &mut next, &core::no_array())
+                    .map_err(cv("union of truth masks"))?;
+                union = next;
+            }
+            union
+        };
+        let txt: PathBuf = dir.join(format!("{stem}.txt"));
+        let text = std::fs::read_to_string(&txt).map_err(|e| VisionError::ReadImage {
+            path: txt.clone(),
+            reason: e.to_string(),
+        })?;
+        let polylines_px = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty())
+            .map(|(i, l)| parse_polyline(&txt, i + 1, l))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(GroundTruth {
+            masks,
+            union_mask,
+            polylines_px,
+        })
+    }
+}
+
+/// How one image's result compares with its truth.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ImageScore {
+    /// Intersection over union of the predicted and true union masks.
+    pub union_iou: f64,
+    /// DICE (2|A∩B| / (|A| + |B|)) of the union masks.
+    pub union_dice: f64,
+    /// Mean over true cables of the DICE of the predicted instance matched
+    /// to it (0 when none is): matching is greedy, highest DICE first, each
+    /// instance matched at most once.
+    pub instance_dice: f64,
+    /// As many instances predicted as there are true cables.
+    pub count_right: bool,
+    pub predicted_count: usize,
+    pub truth_count: usize,
+    /// Mean distance from the predicted splines' samples to the nearest true
+    /// centreline; `None` when nothing was predicted.
+    pub centerline_px: Option<f64>,
+    /// Mean distance from each predicted grasp point to the nearest true
+    /// centreline; `None` when nothing was predicted.
+    pub grasp_error_px: Option<f64>,
+}
+
+fn count(m: &Mat) -> f64 {
+    f64::from(core::count_non_zero(m).unwrap_or(0))
+}
+
+/// (|A∩B|, |A|, |B|) of two masks; zeros when they cannot be compared
+/// (different sizes).
+fn overlap(a: &Mat, b: &Mat) -> (f64, f64, f64) {
+    let mut both = Mat::default();
+    if core::bitwise_and(a, b, &mut both, &core::no_array()).is_err() {
+        return (0.0, count(a), count(b));
+    }
+    (count(&both), count(a), count(b))
+}
+
+fn dice(a: &Mat, b: &Mat) -> f64 {
+    let (i, na, nb) = overlap(a, b);
+    if na + nb > 0.0 {
+        2.0 * i / (na + nb)
+    } else {
+        1.0
+    }
+}
+
+/// Distance from `p` to the nearest segment of any of `polylines`.
+pub fn distance_to_polylines(p: [f64; 2], polylines: &[Vec<[f64; 2]>]) -> f64 {
+    let mut best = f64::INFINITY;
+    for line in polylines {
+        if let [only] = line.as_slice() {
+            best = best.min((p[0] - only[0]).hypot(p[1] - only[1]));
+        }
+        for w in line.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len2 = dx * dx + dy * dy;
+            let t = if len2 > 0.0 {
+                (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (cx, cy) = (a[0] + t * dx, a[1] + t * dy);
+            best = best.min((p[0] - cx).hypot(p[1] - cy));
+        }
+    }
+    best
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Scores a pipeline output against the truth.
+pub fn score(output: &VisionOutput, truth: &GroundTruth) -> ImageScore {
+    score_cables(&output.cables, &output.union_mask, truth)
+}
+
+/// Scores instances and a union mask against the truth (for results that
+/// did not come from [`Pipeline::detect`](super::Pipeline::detect)).
+pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTruth) -> ImageScore {
+    let (inter, np, nt) = overlap(union_mask, &truth.union_mask);
+    let union = np + nt - inter;
+    let union_iou = if union > 0.0 { inter / union } else { 1.0 };
+    let union_dice = if np + nt > 0.0 {
+        2.0 * inter / (np + nt)
+    } else {
+        1.0
+    };
+
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (t, tm) in truth.masks.iter().enumerate() {
+        for (p, cable) in cables.iter().enumerate() {
+            let d = dice(&cable.mask, tm);
+            if d > 0.0 {
+                pairs.push((d, t, p));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut truth_used = vec![false; truth.masks.len()];
+    let mut pred_used = vec![false; cables.len()];
+    let mut matched = 0.0;
+    for (d, t, p) in pairs {
+        if !truth_used[t] && !pred_used[p] {
+            truth_used[t] = true;
+            pred_used[p] = true;
+            matched += d;
+        }
+    }
+    let truth_count = truth.masks.len();
+    let instance_dice = if truth_count > 0 {
+        matched / truth_count as f64
+    } else if cables.is_empty() {
+        1.0
+    } else {
+        0.0
+    };
+    let centerline_px = mean(
+        cables
+            .iter()
+            .flat_map(|c| c.samples_px.iter())
+            .map(|&p| distance_to_polylines(p, &truth.polylines_px)),
+    );
+    let grasp_error_px = mean(
+        cables
+            .iter()
+            .map(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px)),
+    );
+    ImageScore {
+        union_iou,
+        union_dice,
+        instance_dice,
+        count_right: cables.len() == truth_count,
+        predicted_count: cables.len(),
+        truth_count,
+        centerline_px,
+        grasp_error_px,
+    }
+}
+
+/// Scores over a data set: means of the per-image scores (the distance
+/// means over the images that have them).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ScoreSummary {
+    pub images: usize,
+    /// Fraction of images with the right number of instances.
+    pub count_accuracy: f64,
+    pub union_iou: f64,
+    pub union_dice: f64,
+    pub instance_dice: f64,
+    pub centerline_px: Option<f64>,
+    pub grasp_error_px: Option<f64>,
+}
+
+/// Summarises per-image scores.
+pub fn summarize(scores: &[ImageScore]) -> ScoreSummary {
+    let n = scores.len().max(1) as f64;
+    ScoreSummary {
+        images: scores.len(),
+        count_accuracy: scores.iter().filter(|s| s.count_right).count() as f64 / n,
+        union_iou: scores.iter().map(|s| s.union_iou).sum::<f64>() / n,
+        union_dice: scores.iter().map(|s| s.union_dice).sum::<f64>() / n,
+        instance_dice: scores.iter().map(|s| s.instance_dice).sum::<f64>() / n,
+        centerline_px: mean(scores.iter().filter_map(|s| s.centerline_px)),
+        grasp_error_px: mean(scores.iter().filter_map(|s| s.grasp_error_px)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polyline_lines_parse_and_bad_ones_say_where() {
+        let p = Path::new("x.txt");
+        assert_eq!(
+            parse_polyline(p, 1, "2 1 2 3 4").unwrap(),
+            vec![[1.0, 2.0], [3.0, 4.0]]
+        );
+        let err = parse_polyline(p, 7, "3 1 2 3 4").unwrap_err();
+        assert!(
+            matches!(err, VisionError::BadAnnotation { line: 7, .. }),
+            "{err}"
+        );
+        assert!(parse_polyline(p, 1, "2 a 2 3 4").is_err());
+    }
+
+    #[test]
+    fn distance_to_a_polyline_is_to_its_nearest_segment() {
+        let lines = vec![vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]];
+        assert!((distance_to_polylines([5.0, 3.0], &lines) - 3.0).abs() < 1e-12);
+        assert!((distance_to_polylines([13.0, 5.0], &lines) - 3.0).abs() < 1e-12);
+        assert!((distance_to_polylines([-3.0, -4.0], &lines) - 5.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,407 @@
+//! The cables' mask: the input normalised to 8-bit BGR, the classical
+//! threshold on a plain background, and the network's mask made binary.
+//!
+//! The classical mask measures each pixel's colour distance (CIELAB, 8-bit
+//! units) from the background's colour, estimated as the image's median
+//! colour: cables are thin, so on a plain table most pixels are table. Otsu
+//! on that distance splits cable from table, morphology cleans the edge and
+//! blobs too small to be cable are dropped.
+
+use opencv::core::{self, Mat, Point, Scalar, Size};
+use opencv::imgproc;
+use opencv::prelude::*;
+
+use super::error::{VisionError, cv};
+
+/// Side of the square blur applied before measuring colour distance: it
+/// averages sensor noise and fine texture out while keeping cables of a
+/// few pixels' width.
+const BLUR_KSIZE_PX: i32 = 5;
+
+/// Factor by which the image is shrunk to estimate the background colour
+/// and decide whether the background is plain: the statistics need only a
+/// few thousand pixels.
+const STATS_DOWNSCALE: i32 = 4;
+
+/// Colour distance (CIELAB, 8-bit units) within which a pixel counts as
+/// "background coloured" in the plain-background test. A uniform table
+/// under even light stays within ~10 of its median; wood grain, cloth
+/// weave and prints spread well beyond.
+pub const PLAIN_NEAR_LAB: f64 = 14.0;
+
+/// Fraction of the (downscaled, blurred) image that must lie within
+/// [`PLAIN_NEAR_LAB`] of the median colour for the background to count as
+/// plain. Cables rarely cover more than 15% of a view; on the cables-dev
+/// photographs (wood, cloth, prints) the fraction ranges well below this.
+pub const PLAIN_MIN_FRACTION: f64 = 0.8;
+
+/// The lowest colour distance the classical threshold may take, whatever
+/// Otsu says: below it two shades of one plain table would be split.
+const MIN_THRESHOLD_LAB: f64 = 12.0;
+
+/// What the classical mask learnt about the background.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BackgroundStats {
+    /// The background's colour estimate: the image's per-channel median in
+    /// 8-bit CIELAB (L·255/100, a+128, b+128).
+    pub background_lab: [f64; 3],
+    /// Fraction of pixels within [`PLAIN_NEAR_LAB`] of that colour.
+    pub near_fraction: f64,
+    /// Whether the background counts as plain (`near_fraction >=
+    /// PLAIN_MIN_FRACTION`).
+    pub plain: bool,
+    /// The colour distance the mask was thresholded at (0 when only the
+    /// background was estimated).
+    pub threshold_lab: f64,
+}
+
+/// Brings any supported image to 8-bit, 3-channel BGR, so the later stages
+/// see one pixel format: gray and BGRA are converted, 16-bit scaled down.
+pub fn to_bgr8(image: &Mat) -> Result<Mat, VisionError> {
+    if image.empty() || image.rows() <= 0 || image.cols() <= 0 {
+        return Err(VisionError::EmptyImage { path: None });
+    }
+    let channels = image.channels();
+    let depth = image.depth();
+    let eight_bit = match depth {
+        core::CV_8U => image.try_clone().map_err(cv("copy input"))?,
+        core::CV_16U => {
+            let mut out = Mat::default();
+            image
+                .convert_to(&mut out, core::CV_8U, 1.0 / 257.0, 0.0)
+                .map_err(cv("scale 16-bit input"))?;
+            out
+        }
+        _ => return Err(VisionError::UnsupportedImage { channels, depth }),
+    };
+    let code = match channels {
+        3 => return Ok(eight_bit),
+        1 => imgproc::COLOR_GRAY2BGR,
+        4 => imgproc::COLOR_BGRA2BGR,
+        _ => return Err(VisionError::UnsupportedImage { channels, depth }),
+    };
+    let mut bgr = Mat::default();
+    imgproc::cvt_color(&eight_bit, &mut bgr, code, 0).map_err(cv("convert input to BGR"))?;
+    Ok(bgr)
+}
+
+/// The bytes of a continuous 8-bit matrix (copying it first when it is a
+/// view into a larger one).
+pub(crate) fn continuous(m: &Mat) -> Result<Mat, VisionError> {
+    if m.is_continuous() {
+        m.try_clone().map_err(cv("copy matrix"))
+    } else {
+        let mut out = Mat::default();
+        m.copy_to(&mut out).map_err(cv("copy matrix"))?;
+        Ok(out)
+    }
+}
+
+/// Blurred 8-bit CIELAB of a BGR image.
+fn blurred_lab(bgr: &Mat) -> Result<Mat, VisionError> {
+    let mut blurred = Mat::default();
+    imgproc::gaussian_blur(
+        bgr,
+        &mut blurred,
+        Size::new(BLUR_KSIZE_PX, BLUR_KSIZE_PX),
+        0.0,
+        0.0,
+        core::BORDER_REPLICATE,
+    )
+    .map_err(cv("blur"))?;
+    let mut lab = Mat::default();
+    imgproc::cvt_color(&blurred, &mut lab, imgproc::COLOR_BGR2Lab, 0)
+        .map_err(cv("convert to Lab"))?;
+    continuous(&lab)
+}
+
+/// Per-channel medians of interleaved 3-channel bytes.
+fn median3(bytes: &[u8]) -> [f64; 3] {
+    let mut hist = [[0usize; 256]; 3];
+    for px in bytes.chunks_exact(3) {
+        for c in 0..3 {
+            hist[c][usize::from(px[c])] += 1;
+        }
+    }
+    let n = bytes.len() / 3;
+    let mut out = [0.0; 3];
+    for c in 0..3 {
+        let mut seen = 0;
+        for (v, count) in hist[c].iter().enumerate() {
+            seen += count;
+            if 2 * seen >= n {
+                out[c] = v as f64;
+                break;
+            }
+        }
+    }
+    out
+}
+
+fn lab_distance(px: &[u8], bg: [f64; 3]) -> f64 {
+    let d0 = f64::from(px[0]) - bg[0];
+    let d1 = f64::from(px[1]) - bg[1];
+    let d2 = f64::from(px[2]) - bg[2];
+    (d0 * d0 + d1 * d1 + d2 * d2).sqrt()
+}
+
+/// Estimates the background colour and decides whether it is plain, on a
+/// downscaled copy of the image.
+pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
+    let small_size = Size::new(
+        (bgr.cols() / STATS_DOWNSCALE).max(1),
+        (bgr.rows() / STATS_DOWNSCALE).max(1),
+    );
+    let mut small = Mat::default();
+    imgproc::resize(bgr, &mut small, small_size, 0.0, 0.0, imgproc::INTER_AREA)
+        .map_err(cv("downscale for background statistics"))?;
+    let lab = blurred_lab(&small)?;
+    let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
+    let background_lab = median3(bytes);
+    let n = bytes.len() / 3;
+    let near = bytes
+        .chunks_exact(3)
+        .filter(|px| lab_distance(px, background_lab) <= PLAIN_NEAR_LAB)
+        .count();
+    let near_fraction = if n == 0 { 0.0 } else { near as f64 / n as f64 };
+    Ok(BackgroundStats {
+        background_lab,
+        near_fraction,
+        plain: near_fraction >= PLAIN_MIN_FRACTION,
+        threshold_lab: 0.0,
+    })
+}
+
+/// The classical mask (CV_8U, 0/255, the image's size) and what it learnt
+/// about the background. `min_blob_area_px`: connected blobs smaller than
+/// this are dropped as noise.
+pub fn classical_mask(
+    bgr: &Mat,
+    min_blob_area_px: f64,
+) -> Result<(Mat, BackgroundStats), VisionError> {
+    let mut stats = background_stats(bgr)?;
+    let lab = blurred_lab(bgr)?;
+    let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
+    let bg = stats.background_lab;
+    let distance: Vec<u8> = bytes
+        .chunks_exact(3)
+        .map(|px| lab_distance(px, bg).round().min(255.0) as u8)
+        .collect();
+    let distance_mat = Mat::new_rows_cols_with_data(bgr.rows(), bgr.cols(), &distance)
+        .map_err(cv("wrap colour distance"))?;
+    let mut scratch = Mat::default();
+    let otsu = imgproc::threshold(
+        &distance_mat,
+        &mut scratch,
+        0.0,
+        255.0,
+        imgproc::THRESH_BINARY | imgproc::THRESH_OTSU,
+    )
+    .map_err(cv("Otsu threshold"))?;
+    let threshold_lab = otsu.max(MIN_THRESHOLD_LAB);
+    stats.threshold_lab = threshold_lab;
+    let mut raw = Mat::default();
+    imgproc::threshold(
+        &distance_mat,
+        &mut raw,
+        threshold_lab,
+        255.0,
+        imgproc::THRESH_BINARY,
+    )
+    .map_err(cv("threshold colour distance"))?;
+    let mask = clean_mask(&raw, min_blob_area_px)?;
+    Ok((mask, stats))
+}
+
+/// Opens away speckle, closes pinholes and drops blobs smaller than
+/// `min_blob_area_px`.
+pub fn clean_mask(raw: &Mat, min_blob_area_px: f64) -> Result<Mat, VisionError> {
+    let kernel = imgproc::get_structuring_element(
+        imgproc::MORPH_ELLIPSE,
+        Size::new(3, 3),
+        Point::new(-1, -1),
+    )
+    .map_err(cv("structuring element"))?;
+    let border = imgproc::morphology_default_border_value().map_err(cv("morphology border"))?;
+    let mut opened = Mat::default();
+    imgproc::morphology_ex(
+        raw,
+        &mut opened,
+        imgproc::MORPH_OPEN,
+        &kernel,
+        Point::new(-1, -1),
+        1,
+        core::BORDER_CONSTANT,
+        border,
+    )
+    .map_err(cv("open mask"))?;
+    let mut closed = Mat::default();
+    imgproc::morphology_ex(
+        &opened,
+        &mut closed,
+        imgproc::MORPH_CLOSE,
+        &kernel,
+        Point::new(-1, -1),
+        1,
+        core::BORDER_CONSTANT,
+        border,
+    )
+    .map_err(cv("close mask"))?;
+    drop_small_blobs(&closed, min_blob_area_px)
+}
+
+/// Keeps the 8-connected blobs of at least `min_area_px` pixels.
+pub fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
+    let mut labels = Mat::default();
+    let mut stats = Mat::default();
+    let mut centroids = Mat::default();
+    let count = imgproc::connected_components_with_stats(
+        mask,
+        &mut labels,
+        &mut stats,
+        &mut centroids,
+        8,
+        core::CV_32S,
+    )
+    .map_err(cv("label mask blobs"))?;
+    let mut keep = vec![false; usize::try_from(count).unwrap_or(0)];
+    for label in 1..count {
+        let area = *stats
+            .at_2d::<i32>(label, imgproc::CC_STAT_AREA)
+            .map_err(cv("read blob area"))?;
+        if let Some(k) = keep.get_mut(label as usize) {
+            *k = f64::from(area) >= min_area_px;
+        }
+    }
+    let labels = continuous(&labels)?;
+    let label_data = labels.data_typed::<i32>().map_err(cv("read blob labels"))?;
+    let out: Vec<u8> = label_data
+        .iter()
+        .map(|&l| {
+            if l > 0 && keep.get(l as usize).copied().unwrap_or(false) {
+                255
+            } else {
+                0
+            }
+        })
+        .collect();
+    Mat::new_rows_cols_with_data(mask.rows(), mask.cols(), &out)
+        .and_then(|m| m.try_clone())
+        .map_err(cv("build cleaned mask"))
+}
+
+/// Makes the network's output a CV_8U 0/255 mask of `size`: 8-bit outputs
+/// count as cable above 127 (or above 0 when their maximum is 1, i.e. a
+/// 0/1 mask), 32-bit float outputs are probabilities cut at 0.5; an output
+/// of another size is resized first.
+pub fn binarize_network_mask(raw: &Mat, size: Size) -> Result<Mat, VisionError> {
+    let bad = || VisionError::BadNetworkMask {
+        channels: raw.channels(),
+        depth: raw.depth(),
+        cols: raw.cols(),
+        rows: raw.rows(),
+    };
+    if raw.empty() || raw.channels() != 1 {
+        return Err(bad());
+    }
+    let cut = match raw.depth() {
+        core::CV_8U => {
+            let mut max = 0.0;
+            core::min_max_loc(raw, None, Some(&mut max), None, None, &core::no_array())
+                .map_err(cv("network mask range"))?;
+            if max <= 1.0 { 0.5 } else { 127.0 }
+        }
+        core::CV_32F => 0.5,
+        _ => return Err(bad()),
+    };
+    let resized = if raw.size().map_err(cv("network mask size"))? == size {
+        raw.try_clone().map_err(cv("copy network mask"))?
+    } else {
+        let mut out = Mat::default();
+        imgproc::resize(raw, &mut out, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+            .map_err(cv("resize network mask"))?;
+        out
+    };
+    let mut binary = Mat::default();
+    imgproc::threshold(&resized, &mut binary, cut, 255.0, imgproc::THRESH_BINARY)
+        .map_err(cv("binarize network mask"))?;
+    let mut out = Mat::default();
+    binary
+        .convert_to(&mut out, core::CV_8U, 1.0, 0.0)
+        .map_err(cv("network mask to 8-bit"))?;
+    Ok(out)
+}
+
+/// A CV_8U mask of `rows`×`cols` with every pixel 0.
+pub fn zeros_u8(rows: i32, cols: i32) -> Result<Mat, VisionError> {
+    Mat::new_rows_cols_with_default(rows, cols, core::CV_8U, Scalar::all(0.0))
+        .map_err(cv("allocate mask"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plain_with_line(bg: f64, fg: f64) -> Mat {
+        let mut img =
+            Mat::new_rows_cols_with_default(120, 160, core::CV_8UC3, Scalar::all(bg)).unwrap();
+        imgproc::line(
+            &mut img,
+            Point::new(10, 60),
+            Point::new(150, 60),
+            Scalar::all(fg),
+            6,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        img
+    }
+
+    #[test]
+    fn a_dark_line_on_a_light_plain_table_is_found() {
+        let img = plain_with_line(220.0, 30.0);
+        let (mask, stats) = classical_mask(&img, 20.0).unwrap();
+        assert!(stats.plain, "{stats:?}");
+        let on = *mask.at_2d::<u8>(60, 80).unwrap();
+        let off = *mask.at_2d::<u8>(20, 80).unwrap();
+        assert_eq!((on, off), (255, 0));
+    }
+
+    #[test]
+    fn gray_bgra_and_16_bit_inputs_become_bgr8() {
+        for typ in [core::CV_8UC1, core::CV_8UC4, core::CV_16UC3, core::CV_16UC1] {
+            let img = Mat::new_rows_cols_with_default(4, 5, typ, Scalar::all(100.0)).unwrap();
+            let bgr = to_bgr8(&img).unwrap();
+            assert_eq!(bgr.typ(), core::CV_8UC3, "type {typ}");
+        }
+        let float =
+            Mat::new_rows_cols_with_default(4, 5, core::CV_32FC3, Scalar::all(0.5)).unwrap();
+        assert!(matches!(
+            to_bgr8(&float),
+            Err(VisionError::UnsupportedImage { .. })
+        ));
+        assert!(matches!(
+            to_bgr8(&Mat::default()),
+            Err(VisionError::EmptyImage { .. })
+        ));
+    }
+
+    #[test]
+    fn network_masks_of_any_scale_become_0_255() {
+        let size = Size::new(8, 6);
+        let ones = Mat::new_rows_cols_with_default(3, 4, core::CV_8UC1, Scalar::all(1.0)).unwrap();
+        let m = binarize_network_mask(&ones, size).unwrap();
+        assert_eq!(m.size().unwrap(), size);
+        assert_eq!(*m.at_2d::<u8>(2, 2).unwrap(), 255);
+        let probs =
+            Mat::new_rows_cols_with_default(6, 8, core::CV_32FC1, Scalar::all(0.3)).unwrap();
+        let m = binarize_network_mask(&probs, size).unwrap();
+        assert_eq!(*m.at_2d::<u8>(2, 2).unwrap(), 0);
+        let three = Mat::new_rows_cols_with_default(6, 8, core::CV_8UC3, Scalar::all(0.0)).unwrap();
+        assert!(matches!(
+            binarize_network_mask(&three, size),
+            Err(VisionError::BadNetworkMask { .. })
+        ));
+    }
+}

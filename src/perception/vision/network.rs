@@ -1,0 +1,269 @@
+//! The cable segmentation network: an ONNX model (`models/
+//! cable_segmentation.onnx`, made by `models/train_segmentation.py`, its
+//! model card in `models/README.md`) run with ONNX Runtime through `ort`.
+//!
+//! The pipeline for a BGR image of W × H (640 × 480 from the camera):
+//! 1. resize to the network's size, half the image's rounded to multiples
+//!    of 16 (320 × 240), with area averaging (`INTER_AREA`);
+//! 2. feed it as float32 `[1, h, w, 3]`, NHWC, the B, G, R values unscaled
+//!    (0..255): the model normalises inside;
+//! 3. read the probability map `[1, 1, h, w]`, resize it bilinearly to
+//!    W × H and keep the pixels above [`SegmentationNet::threshold`] as 255.
+//!
+//! ONNX Runtime is loaded at run time (`ort`'s `load-dynamic`) from the
+//! library the caller names, once per process: `ort` allows one environment
+//! per process, so every [`SegmentationNet`] shares it, and a later `load`
+//! that names another library is an error.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use opencv::core::{CV_8UC3, Mat, Scalar, Size};
+use opencv::prelude::*;
+use opencv::{core, imgproc};
+use ort::environment::Environment;
+use ort::session::Session;
+use ort::session::builder::GraphOptimizationLevel;
+use ort::value::TensorRef;
+
+/// Intra-op threads of a session: the cell's computer has two cores.
+const INTRA_THREADS: usize = 2;
+
+/// Probability above which a pixel is cable, unless set otherwise.
+pub const DEFAULT_THRESHOLD: f32 = 0.5;
+
+/// The model's input and output names.
+const INPUT: &str = "bgr";
+
+/// Errors of the segmentation network.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum NetworkError {
+    /// The model file is missing or unreadable. Fix: pass the path of
+    /// `models/cable_segmentation.onnx` (or retrain it with
+    /// `models/train_segmentation.py`).
+    #[error("segmentation model {path} is missing or unreadable: {reason}")]
+    ModelMissing { path: PathBuf, reason: String },
+    /// The ONNX Runtime library could not be loaded, or a different one is
+    /// already loaded in this process. Fix: run `scripts/setup`, which puts
+    /// it in `.setup/onnxruntime/`, or point `ORT_DYLIB_PATH` at a
+    /// `libonnxruntime.so` of version 1.31 or later.
+    #[error(
+        "ONNX Runtime library {library} could not be used: {reason} \
+         (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
+    )]
+    Runtime { library: PathBuf, reason: String },
+    /// The model could not be prepared or run (a corrupt or incompatible
+    /// model, or ONNX Runtime failed).
+    #[error("segmentation network inference failed: {reason}")]
+    Inference { reason: String },
+    /// The input image is not what the network takes: it must be a
+    /// non-empty 8-bit, 3-channel BGR image (or an OpenCV operation on it
+    /// failed).
+    #[error("segmentation network input image: {reason}")]
+    Image { reason: String },
+}
+
+/// The ONNX Runtime environment of this process and the library it came
+/// from. Behind a mutex rather than a `OnceLock` so that a failed load
+/// (a wrong path) leaves it empty for a later, correct one.
+static RUNTIME: Mutex<Option<(PathBuf, Environment)>> = Mutex::new(None);
+
+/// The process's ONNX Runtime environment, loading `library` the first time.
+fn environment(library: &Path) -> Result<Environment, NetworkError> {
+    let runtime_error = |reason: String| NetworkError::Runtime {
+        library: library.to_path_buf(),
+        reason,
+    };
+    let wanted = library
+        .canonicalize()
+        .map_err(|e| runtime_error(format!("cannot open the library file: {e}")))?;
+    if !wanted.is_file() {
+        return Err(runtime_error("not a file".to_owned()));
+    }
+    // A panic elsewhere while holding the lock leaves the value consistent.
+    let mut runtime = RUNTIME.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((loaded, env)) = runtime.as_ref() {
+        if *loaded == wanted {
+            return Ok(env.clone());
+        }
+        return Err(runtime_error(format!(
+            "ONNX Runtime is already loaded in this process from {}, and only one \
+             library can be loaded per process",
+            loaded.display()
+        )));
+    }
+    let env = ort::init_from(&wanted)
+        .map_err(|e| runtime_error(e.to_string()))?
+        .with_name("cablecell")
+        .with_telemetry(false)
+        .build()
+        .map_err(|e| runtime_error(e.to_string()))?;
+    *runtime = Some((wanted, env.clone()));
+    Ok(env)
+}
+
+/// The segmentation network, ready to run.
+pub struct SegmentationNet {
+    session: Session,
+    /// Probability above which a pixel is cable in [`Self::mask`];
+    /// [`DEFAULT_THRESHOLD`] after [`Self::load`].
+    pub threshold: f32,
+    /// Scratch buffers, reused between images.
+    small: Mat,
+    input: Vec<f32>,
+}
+
+impl std::fmt::Debug for SegmentationNet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SegmentationNet")
+            .field("threshold", &self.threshold)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The network's input size for an image of `width` × `height`: half of it,
+/// rounded to multiples of 16 (the model halves its input four times).
+pub fn network_size(width: i32, height: i32) -> (i32, i32) {
+    let round16 = |v: i32| ((v + 16) / 32).max(1) * 16;
+    (round16(width), round16(height))
+}
+
+impl SegmentationNet {
+    /// Loads `model` into a session on the ONNX Runtime library
+    /// `runtime_library` (ort's load-dynamic; the lead passes
+    /// `ORT_DYLIB_PATH` or `.setup/onnxruntime/libonnxruntime.so.1.31.1`).
+    /// The library is loaded once per process: a second `load` naming
+    /// another library gives [`NetworkError::Runtime`].
+    pub fn load(model: &Path, runtime_library: &Path) -> Result<Self, NetworkError> {
+        let model_bytes = std::fs::read(model).map_err(|e| NetworkError::ModelMissing {
+            path: model.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        let env = environment(runtime_library)?;
+        let inference = |e: ort::Error| NetworkError::Inference {
+            reason: format!("model {}: {e}", model.display()),
+        };
+        let recover = |e: ort::Error<ort::session::builder::SessionBuilder>| inference(e.into());
+        let session = Session::builder(&env)
+            .map_err(inference)?
+            .with_intra_threads(INTRA_THREADS)
+            .map_err(recover)?
+            .with_inter_threads(1)
+            .map_err(recover)?
+            .with_optimization_level(GraphOptimizationLevel::All)
+            .map_err(recover)?
+            .commit_from_memory(&model_bytes)
+            .map_err(inference)?;
+        if session.inputs().len() != 1 || session.outputs().len() != 1 {
+            return Err(NetworkError::Inference {
+                reason: format!(
+                    "model {} has {} inputs and {} outputs, expected one of each",
+                    model.display(),
+                    session.inputs().len(),
+                    session.outputs().len()
+                ),
+            });
+        }
+        tracing::debug!(model = %model.display(), "segmentation network loaded");
+        Ok(Self {
+            session,
+            threshold: DEFAULT_THRESHOLD,
+            small: Mat::default(),
+            input: Vec::new(),
+        })
+    }
+
+    /// The cable probability of every pixel of a BGR image: CV_32F in
+    /// [0, 1], the image's size.
+    pub fn probability(&mut self, bgr: &Mat) -> Result<Mat, NetworkError> {
+        let image = |e: opencv::Error| NetworkError::Image {
+            reason: e.to_string(),
+        };
+        if bgr.empty() || bgr.typ() != CV_8UC3 {
+            return Err(NetworkError::Image {
+                reason: format!(
+                    "expected a non-empty 8-bit 3-channel BGR image, got {}x{} of type {}",
+                    bgr.cols(),
+                    bgr.rows(),
+                    core::type_to_string(bgr.typ()).unwrap_or_default()
+                ),
+            });
+        }
+        let (w, h) = network_size(bgr.cols(), bgr.rows());
+        imgproc::resize(
+            bgr,
+            &mut self.small,
+            Size::new(w, h),
+            0.0,
+            0.0,
+            imgproc::INTER_AREA,
+        )
+        .map_err(image)?;
+        let bytes = self.small.data_bytes().map_err(image)?;
+        self.input.clear();
+        self.input.extend(bytes.iter().map(|&b| f32::from(b)));
+        let (w_us, h_us) = (w as usize, h as usize);
+        let view =
+            ndarray::ArrayView4::from_shape((1, h_us, w_us, 3), &self.input[..]).map_err(|e| {
+                NetworkError::Inference {
+                    reason: format!("input tensor: {e}"),
+                }
+            })?;
+        let inference = |e: ort::Error| NetworkError::Inference {
+            reason: e.to_string(),
+        };
+        let tensor = TensorRef::from_array_view(view).map_err(inference)?;
+        let outputs = self
+            .session
+            .run(ort::inputs![INPUT => tensor])
+            .map_err(inference)?;
+        let (shape, data) = outputs[0].try_extract_tensor::<f32>().map_err(inference)?;
+        if shape.iter().product::<i64>() != (w_us * h_us) as i64 || data.len() != w_us * h_us {
+            return Err(NetworkError::Inference {
+                reason: format!("output of shape {shape:?}, expected [1, 1, {h}, {w}]"),
+            });
+        }
+        let small_prob = Mat::new_rows_cols_with_data(h, w, data).map_err(image)?;
+        let mut prob = Mat::default();
+        imgproc::resize(
+            &small_prob,
+            &mut prob,
+            bgr.size().map_err(image)?,
+            0.0,
+            0.0,
+            imgproc::INTER_LINEAR,
+        )
+        .map_err(image)?;
+        Ok(prob)
+    }
+
+    /// The cable mask of a BGR image: CV_8U, 0 or 255, the image's size; 255
+    /// where the probability exceeds [`Self::threshold`].
+    pub fn mask(&mut self, bgr: &Mat) -> Result<Mat, NetworkError> {
+        let prob = self.probability(bgr)?;
+        let mut mask = Mat::default();
+        core::compare(
+            &prob,
+            &Scalar::all(f64::from(self.threshold)),
+            &mut mask,
+            core::CMP_GT,
+        )
+        .map_err(|e| NetworkError::Image {
+            reason: e.to_string(),
+        })?;
+        Ok(mask)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn network_size_halves_and_rounds_to_16() {
+        assert_eq!(network_size(640, 480), (320, 240));
+        assert_eq!(network_size(1280, 720), (640, 368));
+        assert_eq!(network_size(10, 10), (16, 16));
+    }
+}

@@ -1,0 +1,723 @@
+//! One path per cable from the mask's skeleton (cablecell's fast instance
+//! method, in the manner of mBEST: Choi et al., "mBEST: Realtime
+//! Deformable Linear Object Detection Through Minimal Bending Energy
+//! Skeleton Pixel Traversals", 2023).
+//!
+//! The mask is thinned (Zhang–Suen) to a one-pixel, 8-connected skeleton;
+//! its end points and junctions become graph nodes and the pixel runs
+//! between them edges. Short spurs (thinning artefacts at blunt ends and
+//! ragged edges) are pruned; junctions joined by an edge shorter than a few
+//! cable widths are merged, because two cables crossing at a shallow angle
+//! thin into two 3-way junctions rather than one 4-way one. At each
+//! (merged) junction the branches are paired so that the total bending is
+//! least: a cable goes straight through a crossing. Walking edges and
+//! pairings from end to end gives one pixel path per cable.
+
+use std::collections::HashMap;
+
+use opencv::core::Mat;
+use opencv::prelude::*;
+
+use super::error::{VisionError, cv};
+use super::mask::continuous;
+
+/// Spurs shorter than this many cable widths (plus [`SPUR_EXTRA_PX`]) are
+/// pruned: thinning a blunt end or a ragged edge leaves spurs of about one
+/// half to one width.
+const SPUR_WIDTHS: f64 = 1.5;
+/// Added to the spur length so that thin cables still lose their spurs.
+const SPUR_EXTRA_PX: f64 = 4.0;
+/// Junctions joined by an edge shorter than this many cable widths are one
+/// crossing: two cables crossing at 25° overlap for about 2.4 widths.
+const MERGE_WIDTHS: f64 = 2.5;
+/// Skeleton pixels this many widths either side of a crossing are left out
+/// of the paths through it.
+const JUNCTION_TRIM_WIDTHS: f64 = 1.0;
+/// Junctions up to this many cable widths apart may still be one crossing
+/// (two cables crossing at 10° overlap for about six widths), when their
+/// shape says so (see `Graph::merge_junctions`).
+const SPLIT_CROSSING_WIDTHS: f64 = 8.0;
+/// How straight both outer branches of a split crossing's junction must run
+/// on into the edge between the junctions.
+const SPLIT_CONTINUE_RAD: f64 = 0.6;
+/// Cost, in radians of bending, of leaving a branch unpaired at a junction
+/// (the cable ends there). Two branches are joined rather than both left
+/// unpaired when their bend is under twice this (about 140°).
+const UNPAIRED_COST_RAD: f64 = 1.2;
+/// Above this many branches at one junction the exact least-bending pairing
+/// is too costly and pairs are taken greedily, straightest first.
+const MAX_EXACT_BRANCHES: usize = 8;
+
+/// One cable's centreline as skeleton pixels, from one end to the other
+/// (gaps where it crosses another cable).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CablePath {
+    /// Pixel centres, in image coordinates (x right, y down).
+    pub points_px: Vec<[f64; 2]>,
+    /// Length along the points.
+    pub length_px: f64,
+}
+
+/// What an instance method found in a mask.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoundPaths {
+    /// One path per cable, at least the minimum length, in a deterministic
+    /// order (by their first point).
+    pub paths: Vec<CablePath>,
+    /// The cables' typical width: mask area over skeleton length.
+    pub width_px: f64,
+}
+
+/// Thinning and graph on a grid padded by one pixel, so that neighbour
+/// look-ups never leave it.
+struct Grid {
+    stride: usize,
+    on: Vec<u8>,
+    offsets: [isize; 8],
+}
+
+impl Grid {
+    /// Pads a CV_8U mask (non-zero = cable).
+    fn from_mask(mask: &Mat) -> Result<Grid, VisionError> {
+        let mask = continuous(mask)?;
+        let bytes = mask.data_bytes().map_err(cv("read mask"))?;
+        let rows = usize::try_from(mask.rows()).unwrap_or(0);
+        let cols = usize::try_from(mask.cols()).unwrap_or(0);
+        let stride = cols + 2;
+        let mut on = vec![0u8; stride * (rows + 2)];
+        for (y, row) in bytes.chunks_exact(cols.max(1)).take(rows).enumerate() {
+            let base = (y + 1) * stride + 1;
+            for (x, &v) in row.iter().enumerate() {
+                on[base + x] = u8::from(v != 0);
+            }
+        }
+        let s = stride as isize;
+        Ok(Grid {
+            stride,
+            on,
+            // N, NE, E, SE, S, SW, W, NW: clockwise from north.
+            offsets: [-s, -s + 1, 1, s + 1, s, s - 1, -1, -s - 1],
+        })
+    }
+
+    fn xy(&self, i: usize) -> [f64; 2] {
+        [
+            (i % self.stride) as f64 - 1.0,
+            (i / self.stride) as f64 - 1.0,
+        ]
+    }
+
+    /// The 8 neighbours' states, clockwise from north.
+    fn ring(&self, i: usize) -> [u8; 8] {
+        let mut r = [0u8; 8];
+        for (k, off) in self.offsets.iter().enumerate() {
+            r[k] = self.on[i.wrapping_add_signed(*off)];
+        }
+        r
+    }
+
+    fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        self.offsets
+            .iter()
+            .map(move |off| i.wrapping_add_signed(*off))
+            .filter(|&j| self.on[j] != 0)
+    }
+
+    fn degree(&self, i: usize) -> usize {
+        self.neighbours(i).count()
+    }
+
+    /// Zhang–Suen thinning of the pixels in `fg`, which is left holding the
+    /// skeleton.
+    fn thin(&mut self, fg: &mut Vec<usize>) {
+        let mut marked = Vec::new();
+        loop {
+            let mut changed = false;
+            for pass in 0..2 {
+                marked.clear();
+                for &i in fg.iter() {
+                    let p = self.ring(i);
+                    let b: u8 = p.iter().sum();
+                    if !(2..=6).contains(&b) {
+                        continue;
+                    }
+                    let a = (0..8).filter(|&k| p[k] == 0 && p[(k + 1) % 8] == 1).count();
+                    if a != 1 {
+                        continue;
+                    }
+                    let (n, e, s, w) = (p[0], p[2], p[4], p[6]);
+                    let keep = if pass == 0 {
+                        n * e * s != 0 || e * s * w != 0
+                    } else {
+                        n * e * w != 0 || n * s * w != 0
+                    };
+                    if !keep {
+                        marked.push(i);
+                    }
+                }
+                for &i in &marked {
+                    self.on[i] = 0;
+                }
+                changed |= !marked.is_empty();
+                fg.retain(|&i| self.on[i] != 0);
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+
+    /// Removes skeleton pixels whose removal keeps their neighbours
+    /// connected (Yokoi's 8-connectivity number is 1) and that are not end
+    /// points: Zhang–Suen leaves staircases and corner pixels that would
+    /// otherwise read as junctions.
+    fn remove_redundant(&mut self, fg: &mut Vec<usize>) {
+        loop {
+            let mut changed = false;
+            for &i in fg.iter() {
+                let p = self.ring(i);
+                let count: u8 = p.iter().sum();
+                if count < 2 {
+                    continue;
+                }
+                // Yokoi's order: x1 = E, x2 = NE, x3 = N, x4 = NW, x5 = W,
+                // x6 = SW, x7 = S, x8 = SE; complements.
+                let x = [p[2], p[1], p[0], p[7], p[6], p[5], p[4], p[3]].map(|v| 1 - v);
+                let n8: i32 = [0usize, 2, 4, 6]
+                    .iter()
+                    .map(|&k| i32::from(x[k]) - i32::from(x[k] * x[(k + 1) % 8] * x[(k + 2) % 8]))
+                    .sum();
+                if n8 == 1 {
+                    self.on[i] = 0;
+                    changed = true;
+                }
+            }
+            fg.retain(|&i| self.on[i] != 0);
+            if !changed {
+                break;
+            }
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum NodeKind {
+    End,
+    Junction,
+}
+
+struct Node {
+    kind: NodeKind,
+    centre_px: [f64; 2],
+}
+
+struct Edge {
+    /// Node at each end.
+    ends: [usize; 2],
+    /// From the pixel of `ends[0]` it leaves to the pixel of `ends[1]`.
+    pixels: Vec<usize>,
+    length_px: f64,
+    alive: bool,
+    /// Inside a merged junction: not a branch of it.
+    internal: bool,
+}
+
+/// A branch of a junction: an edge and which of its ends is at the
+/// junction.
+type Branch = (usize, usize);
+
+const NONE: usize = usize::MAX;
+
+fn polyline_length(points: &[[f64; 2]]) -> f64 {
+    points
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
+}
+
+struct Graph {
+    grid: Grid,
+    nodes: Vec<Node>,
+    edges: Vec<Edge>,
+    /// Paths that are closed loops of skeleton with no node on them.
+    loops: Vec<Vec<usize>>,
+}
+
+impl Graph {
+    fn build(grid: Grid, skeleton: &[usize]) -> Graph {
+        let mut node_of = vec![NONE; grid.on.len()];
+        let mut nodes = Vec::new();
+        let mut node_pixels: Vec<Vec<usize>> = Vec::new();
+        for &i in skeleton {
+            if node_of[i] != NONE {
+                continue;
+            }
+            let degree = grid.degree(i);
+            if degree == 1 {
+                node_of[i] = nodes.len();
+                nodes.push(Node {
+                    kind: NodeKind::End,
+                    centre_px: grid.xy(i),
+                });
+                node_pixels.push(vec![i]);
+            } else if degree >= 3 {
+                // A junction: all 8-adjacent junction pixels together.
+                let id = nodes.len();
+                let mut cluster = vec![i];
+                node_of[i] = id;
+                let mut k = 0;
+                while k < cluster.len() {
+                    let c = cluster[k];
+                    k += 1;
+                    for j in grid.neighbours(c) {
+                        if node_of[j] == NONE && grid.degree(j) >= 3 {
+                            node_of[j] = id;
+                            cluster.push(j);
+                        }
+                    }
+                }
+                let n = cluster.len() as f64;
+                let sum = cluster.iter().fold([0.0, 0.0], |acc, &c| {
+                    let p = grid.xy(c);
+                    [acc[0] + p[0], acc[1] + p[1]]
+                });
+                nodes.push(Node {
+                    kind: NodeKind::Junction,
+                    centre_px: [sum[0] / n, sum[1] / n],
+                });
+                node_pixels.push(cluster);
+            }
+        }
+
+        let mut visited = vec![false; grid.on.len()];
+        let mut edges = Vec::new();
+        let mut direct: std::collections::HashSet<(usize, usize)> =
+            std::collections::HashSet::new();
+        for (n, pixels) in node_pixels.iter().enumerate() {
+            for &p in pixels {
+                for q in grid.neighbours(p) {
+                    let m = node_of[q];
+                    if m != NONE {
+                        if m != n && direct.insert((n.min(m), n.max(m))) {
+                            edges.push(Edge {
+                                ends: [n, m],
+                                pixels: vec![p, q],
+                                length_px: 1.0,
+                                alive: true,
+                                internal: false,
+                            });
+                        }
+                        continue;
+                    }
+                    if visited[q] {
+                        continue;
+                    }
+                    let mut pixels = vec![p, q];
+                    visited[q] = true;
+                    let (mut prev, mut cur) = (p, q);
+                    let end = loop {
+                        let next = grid.neighbours(cur).find(|&r| {
+                            r != prev
+                                && (node_of[r] != NONE || !visited[r])
+                                && !(r == p && pixels.len() == 2)
+                        });
+                        match next {
+                            Some(r) if node_of[r] != NONE => {
+                                pixels.push(r);
+                                break node_of[r];
+                            }
+                            Some(r) => {
+                                visited[r] = true;
+                                pixels.push(r);
+                                prev = cur;
+                                cur = r;
+                            }
+                            None => {
+                                // A dead end no node marks (cannot happen on a
+                                // clean skeleton): make it an end.
+                                nodes.push(Node {
+                                    kind: NodeKind::End,
+                                    centre_px: grid.xy(cur),
+                                });
+                                break nodes.len() - 1;
+                            }
+                        }
+                    };
+                    let pts: Vec<[f64; 2]> = pixels.iter().map(|&i| grid.xy(i)).collect();
+                    edges.push(Edge {
+                        ends: [n, end],
+                        pixels,
+                        length_px: polyline_length(&pts),
+                        alive: true,
+                        internal: false,
+                    });
+                }
+            }
+        }
+
+        // Closed loops of skeleton with no node: trace each once.
+        let mut loops = Vec::new();
+        for &i in skeleton {
+            if node_of[i] != NONE || visited[i] {
+                continue;
+            }
+            let mut pixels = vec![i];
+            visited[i] = true;
+            let mut cur = i;
+            while let Some(r) = grid
+                .neighbours(cur)
+                .find(|&r| !visited[r] && node_of[r] == NONE)
+            {
+                visited[r] = true;
+                pixels.push(r);
+                cur = r;
+            }
+            loops.push(pixels);
+        }
+        Graph {
+            grid,
+            nodes,
+            edges,
+            loops,
+        }
+    }
+
+    fn degrees(&self) -> Vec<usize> {
+        let mut degree = vec![0; self.nodes.len()];
+        for e in self.edges.iter().filter(|e| e.alive && !e.internal) {
+            degree[e.ends[0]] += 1;
+            degree[e.ends[1]] += 1;
+        }
+        degree
+    }
+
+    /// Drops spurs (end-to-junction edges shorter than `spur_px`), shortest
+    /// first, as long as their junction keeps at least two other branches.
+    fn prune_spurs(&mut self, spur_px: f64) {
+        let mut degree = self.degrees();
+        let mut spurs: Vec<usize> = (0..self.edges.len())
+            .filter(|&e| {
+                let edge = &self.edges[e];
+                let kinds = edge.ends.map(|n| self.nodes[n].kind);
+                edge.length_px < spur_px
+                    && kinds.contains(&NodeKind::End)
+                    && kinds.contains(&NodeKind::Junction)
+            })
+            .collect();
+        spurs.sort_by(|&a, &b| self.edges[a].length_px.total_cmp(&self.edges[b].length_px));
+        for e in spurs {
+            let ends = self.edges[e].ends;
+            let junction = if self.nodes[ends[0]].kind == NodeKind::Junction {
+                ends[0]
+            } else {
+                ends[1]
+            };
+            if degree[junction] >= 3 {
+                self.edges[e].alive = false;
+                degree[junction] -= 1;
+            }
+        }
+    }
+
+    /// Merges junctions that are one crossing; returns each node's merged
+    /// junction (its root). Two junctions are one crossing when the edge
+    /// joining them is shorter than [`MERGE_WIDTHS`] cable widths, or when
+    /// it is shorter than [`SPLIT_CROSSING_WIDTHS`] and both are 3-way
+    /// junctions whose two other branches both run on into it (within
+    /// [`SPLIT_CONTINUE_RAD`]): the shape of two cables crossing at a
+    /// shallow angle (or running together for a while), unlike a cable end
+    /// touching another's side.
+    fn merge_junctions(&mut self, width_px: f64) -> Vec<usize> {
+        let mut parent: Vec<usize> = (0..self.nodes.len()).collect();
+        fn root(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        let mut incident: Vec<Vec<Branch>> = vec![Vec::new(); self.nodes.len()];
+        for (e, edge) in self.edges.iter().enumerate() {
+            if edge.alive {
+                incident[edge.ends[0]].push((e, 0));
+                incident[edge.ends[1]].push((e, 1));
+            }
+        }
+        let is_junction = |n: usize| self.nodes[n].kind == NodeKind::Junction;
+        let mut merge = Vec::new();
+        for (e, edge) in self.edges.iter().enumerate() {
+            let [a, b] = edge.ends;
+            if !edge.alive || !is_junction(a) || !is_junction(b) {
+                continue;
+            }
+            let short = edge.length_px < MERGE_WIDTHS * width_px;
+            let split_crossing = a != b
+                && edge.length_px < SPLIT_CROSSING_WIDTHS * width_px
+                && [(a, 0), (b, 1)].iter().all(|&(n, side)| {
+                    let branches = &incident[n];
+                    if branches.len() != 3 {
+                        return false;
+                    }
+                    let centre = self.nodes[n].centre_px;
+                    let into = self.branch_direction((e, side), centre, width_px);
+                    branches.iter().filter(|&&br| br != (e, side)).all(|&br| {
+                        bend_rad(self.branch_direction(br, centre, width_px), into)
+                            < SPLIT_CONTINUE_RAD
+                    })
+                });
+            if short || split_crossing {
+                merge.push(e);
+            }
+        }
+        for e in merge {
+            let [a, b] = self.edges[e].ends;
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra] = rb;
+            self.edges[e].internal = true;
+        }
+        (0..self.nodes.len())
+            .map(|i| root(&mut parent, i))
+            .collect()
+    }
+
+    /// Pixels of a branch going out of its junction.
+    fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
+        let px = &self.edges[e].pixels;
+        let mut pts: Vec<[f64; 2]> = px.iter().map(|&i| self.grid.xy(i)).collect();
+        if side == 1 {
+            pts.reverse();
+        }
+        pts
+    }
+
+    /// The branch's direction leaving the junction, measured past the
+    /// junction's distortion (about one width out) over two widths.
+    fn branch_direction(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
+        let pts = self.outward(branch);
+        let Some(last) = pts.len().checked_sub(1) else {
+            return [0.0, 0.0];
+        };
+        let skip = (0.75 * width_px).round() as usize;
+        let span = (2.0 * width_px).max(8.0).round() as usize;
+        let i0 = skip.min(last);
+        let i1 = (skip + span).min(last);
+        let (from, to) = if i1 > i0 {
+            (pts[i0], pts[i1])
+        } else {
+            (centre, pts[last])
+        };
+        let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
+        let norm = dx.hypot(dy);
+        if norm > 0.0 {
+            [dx / norm, dy / norm]
+        } else {
+            [0.0, 0.0]
+        }
+    }
+}
+
+/// Bending, in radians, of going in along `a` (pointing out of the
+/// junction) and out along `b`: 0 for a straight continuation.
+fn bend_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let cos = -(a[0] * b[0] + a[1] * b[1]);
+    cos.clamp(-1.0, 1.0).acos()
+}
+
+/// Least total cost pairing of `k` branches where `cost[i][j]` is the bend
+/// of joining i and j and leaving one unpaired costs [`UNPAIRED_COST_RAD`].
+fn best_pairing(cost: &[Vec<f64>]) -> Vec<(usize, usize)> {
+    let k = cost.len();
+    if k > MAX_EXACT_BRANCHES {
+        let mut candidates: Vec<(f64, usize, usize)> = (0..k)
+            .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
+            .map(|(i, j)| (cost[i][j], i, j))
+            .filter(|c| c.0 < 2.0 * UNPAIRED_COST_RAD)
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut used = vec![false; k];
+        let mut pairs = Vec::new();
+        for (_, i, j) in candidates {
+            if !used[i] && !used[j] {
+                used[i] = true;
+                used[j] = true;
+                pairs.push((i, j));
+            }
+        }
+        return pairs;
+    }
+    fn search(
+        cost: &[Vec<f64>],
+        free: u32,
+        acc: f64,
+        pairs: &mut Vec<(usize, usize)>,
+        best: &mut (f64, Vec<(usize, usize)>),
+    ) {
+        if acc >= best.0 {
+            return;
+        }
+        if free == 0 {
+            *best = (acc, pairs.clone());
+            return;
+        }
+        let i = free.trailing_zeros() as usize;
+        let rest = free & !(1 << i);
+        search(cost, rest, acc + UNPAIRED_COST_RAD, pairs, best);
+        let mut others = rest;
+        while others != 0 {
+            let j = others.trailing_zeros() as usize;
+            others &= !(1 << j);
+            pairs.push((i, j));
+            search(cost, rest & !(1 << j), acc + cost[i][j], pairs, best);
+            pairs.pop();
+        }
+    }
+    let mut best = (f64::INFINITY, Vec::new());
+    search(cost, (1u32 << k) - 1, 0.0, &mut Vec::new(), &mut best);
+    best.1
+}
+
+/// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
+/// end to end, of at least `min_length_px`.
+pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, VisionError> {
+    let mut grid = Grid::from_mask(mask)?;
+    let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
+    let area = fg.len() as f64;
+    grid.thin(&mut fg);
+    grid.remove_redundant(&mut fg);
+    let width_px = if fg.is_empty() {
+        0.0
+    } else {
+        area / fg.len() as f64
+    };
+    let mut graph = Graph::build(grid, &fg);
+    graph.prune_spurs(SPUR_WIDTHS * width_px + SPUR_EXTRA_PX);
+    let root = graph.merge_junctions(width_px);
+
+    // Branches per merged junction, and their least-bending pairing.
+    let mut branches: HashMap<usize, Vec<Branch>> = HashMap::new();
+    for (e, edge) in graph.edges.iter().enumerate() {
+        if !edge.alive || edge.internal {
+            continue;
+        }
+        for side in 0..2 {
+            let n = edge.ends[side];
+            if graph.nodes[n].kind == NodeKind::Junction {
+                branches.entry(root[n]).or_default().push((e, side));
+            }
+        }
+    }
+    let mut partner: HashMap<Branch, Branch> = HashMap::new();
+    let mut junctions: Vec<usize> = branches.keys().copied().collect();
+    junctions.sort_unstable();
+    for j in &junctions {
+        let list = &branches[j];
+        let centre = graph.nodes[*j].centre_px;
+        let pairs = if list.len() == 2 {
+            vec![(0, 1)]
+        } else {
+            let dirs: Vec<[f64; 2]> = list
+                .iter()
+                .map(|&b| graph.branch_direction(b, centre, width_px))
+                .collect();
+            let cost: Vec<Vec<f64>> = dirs
+                .iter()
+                .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
+                .collect();
+            best_pairing(&cost)
+        };
+        for (a, b) in pairs {
+            partner.insert(list[a], list[b]);
+            partner.insert(list[b], list[a]);
+        }
+    }
+
+    // Walk from every terminal branch end (an end point, or a junction
+    // branch left unpaired) through the pairings.
+    let mut used = vec![false; graph.edges.len()];
+    let mut paths = Vec::new();
+    // Skeleton pixels within about a width of a crossing lean towards the
+    // other cable: a path through a crossing leaves them out and the spline
+    // bridges the gap.
+    let trim = (JUNCTION_TRIM_WIDTHS * width_px).round() as usize;
+    let walk = |start: Branch, used: &mut Vec<bool>| -> Vec<[f64; 2]> {
+        let mut pts = Vec::new();
+        let mut cur = start;
+        let mut entered_crossing = false;
+        loop {
+            used[cur.0] = true;
+            let edge_pts = graph.outward(cur);
+            let far = (cur.0, 1 - cur.1);
+            let next = partner.get(&far).copied().filter(|next| !used[next.0]);
+            let head = if entered_crossing { trim } else { 0 };
+            let tail = if next.is_some() { trim } else { 0 };
+            if edge_pts.len() > 2 * (head + tail) {
+                pts.extend_from_slice(&edge_pts[head..edge_pts.len() - tail]);
+            } else {
+                pts.extend(edge_pts);
+            }
+            match next {
+                Some(next) => {
+                    cur = next;
+                    entered_crossing = true;
+                }
+                None => break,
+            }
+        }
+        pts
+    };
+    let mut starts: Vec<Branch> = Vec::new();
+    for (e, edge) in graph.edges.iter().enumerate() {
+        if !edge.alive || edge.internal {
+            continue;
+        }
+        for side in 0..2 {
+            let terminal = match graph.nodes[edge.ends[side]].kind {
+                NodeKind::End => true,
+                NodeKind::Junction => !partner.contains_key(&(e, side)),
+            };
+            if terminal {
+                starts.push((e, side));
+            }
+        }
+    }
+    for start in starts {
+        if !used[start.0] {
+            paths.push(walk(start, &mut used));
+        }
+    }
+    // What is left are cables closed through junctions: open them anywhere.
+    for e in 0..graph.edges.len() {
+        let edge = &graph.edges[e];
+        if edge.alive && !edge.internal && !used[e] {
+            paths.push(walk((e, 0), &mut used));
+        }
+    }
+    for lp in &graph.loops {
+        paths.push(lp.iter().map(|&i| graph.grid.xy(i)).collect());
+    }
+
+    let mut out: Vec<CablePath> = paths
+        .into_iter()
+        .filter_map(|mut points_px| {
+            let (first, last) = (*points_px.first()?, *points_px.last()?);
+            if (last[0], last[1]) < (first[0], first[1]) {
+                points_px.reverse();
+            }
+            let length_px = polyline_length(&points_px);
+            (length_px >= min_length_px).then_some(CablePath {
+                points_px,
+                length_px,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        let (pa, pb) = (a.points_px[0], b.points_px[0]);
+        (pa[0], pa[1])
+            .partial_cmp(&(pb[0], pb[1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    Ok(FoundPaths {
+        paths: out,
+        width_px,
+    })
+}

@@ -1,0 +1,255 @@
+//! The cable model of the paper's Section II: a cubic B-spline through the
+//! cable's centreline, parameterised by s ∈ [0, 1] from one end to the
+//! other, whose middle (s = 0.5) is the grasp point and whose direction
+//! there comes from the points at s = 0.45 and s = 0.55.
+
+use nalgebra::DMatrix;
+
+/// Length of cable, in pixels, per control point: fine enough to follow a
+/// bend of a few cable widths, coarse enough to smooth pixel staircases.
+const PX_PER_CONTROL_POINT: f64 = 30.0;
+/// Most control points a spline gets, whatever its length.
+const MAX_CONTROL_POINTS: usize = 24;
+/// Weight of the second-difference penalty on the control points, relative
+/// to the data term's scale: it only keeps the least-squares system well
+/// posed where a knot span holds few points (across a crossing gap).
+const SMOOTHING: f64 = 1e-6;
+
+/// A clamped B-spline curve in the image plane.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BSpline {
+    /// Polynomial degree (3, lower only when fitted to very few points).
+    pub degree: usize,
+    /// Control points in image coordinates (x right, y down).
+    pub control_points_px: Vec<[f64; 2]>,
+    /// Clamped knot vector on [0, 1], `control_points + degree + 1` long.
+    pub knots: Vec<f64>,
+}
+
+/// How many control points a cable of `length_px` gets.
+pub fn control_points_for_length(length_px: f64) -> usize {
+    let n = (length_px / PX_PER_CONTROL_POINT).round();
+    (n.max(4.0) as usize).min(MAX_CONTROL_POINTS)
+}
+
+/// The knot span holding `u` (The NURBS Book, A2.1).
+fn find_span(knots: &[f64], degree: usize, n_control: usize, u: f64) -> usize {
+    if u >= knots[n_control] {
+        return n_control - 1;
+    }
+    if u <= knots[degree] {
+        return degree;
+    }
+    let (mut low, mut high) = (degree, n_control);
+    let mut mid = (low + high) / 2;
+    while u < knots[mid] || u >= knots[mid + 1] {
+        if u < knots[mid] {
+            high = mid;
+        } else {
+            low = mid;
+        }
+        mid = (low + high) / 2;
+    }
+    mid
+}
+
+/// The `degree + 1` non-zero basis functions at `u` in `span` (The NURBS
+/// Book, A2.2).
+fn basis(knots: &[f64], degree: usize, span: usize, u: f64) -> Vec<f64> {
+    let mut n = vec![0.0; degree + 1];
+    let mut left = vec![0.0; degree + 1];
+    let mut right = vec![0.0; degree + 1];
+    n[0] = 1.0;
+    for j in 1..=degree {
+        left[j] = u - knots[span + 1 - j];
+        right[j] = knots[span + j] - u;
+        let mut saved = 0.0;
+        for r in 0..j {
+            let denom = right[r + 1] + left[j - r];
+            let temp = if denom.abs() > 0.0 { n[r] / denom } else { 0.0 };
+            n[r] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        n[j] = saved;
+    }
+    n
+}
+
+impl BSpline {
+    /// Least-squares fit with chord-length parameterisation: the points'
+    /// cumulative distance, scaled to [0, 1], is their parameter, so s is
+    /// close to the fraction of length from the first point. Degree 3 when
+    /// there are enough points; `None` for fewer than two distinct points.
+    pub fn fit(points_px: &[[f64; 2]], control_points: usize) -> Option<BSpline> {
+        let finite: Vec<[f64; 2]> = points_px
+            .iter()
+            .copied()
+            .filter(|p| p[0].is_finite() && p[1].is_finite())
+            .collect();
+        let mut u = Vec::with_capacity(finite.len());
+        let mut acc = 0.0;
+        u.push(0.0);
+        for w in finite.windows(2) {
+            acc += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+            u.push(acc);
+        }
+        if finite.len() < 2 || acc <= 0.0 {
+            return None;
+        }
+        for v in &mut u {
+            *v /= acc;
+        }
+        let m = finite.len();
+        let degree = 3.min(m - 1);
+        let n = control_points.clamp(degree + 1, m.max(degree + 1));
+        let interior = n - degree - 1;
+        let mut knots = vec![0.0; degree + 1];
+        knots.extend((1..=interior).map(|i| i as f64 / (interior + 1) as f64));
+        knots.extend(std::iter::repeat_n(1.0, degree + 1));
+
+        let mut ata = DMatrix::<f64>::zeros(n, n);
+        let mut atb = DMatrix::<f64>::zeros(n, 2);
+        for (p, &ui) in finite.iter().zip(&u) {
+            let span = find_span(&knots, degree, n, ui);
+            let b = basis(&knots, degree, span, ui);
+            let first = span - degree;
+            for (a, &ba) in b.iter().enumerate() {
+                for (c, &bc) in b.iter().enumerate() {
+                    ata[(first + a, first + c)] += ba * bc;
+                }
+                atb[(first + a, 0)] += ba * p[0];
+                atb[(first + a, 1)] += ba * p[1];
+            }
+        }
+        // Second-difference penalty, scaled to the data's weight.
+        let lambda = SMOOTHING * m as f64 / n as f64;
+        for i in 0..n.saturating_sub(2) {
+            let d = [1.0, -2.0, 1.0];
+            for a in 0..3 {
+                for c in 0..3 {
+                    ata[(i + a, i + c)] += lambda * d[a] * d[c];
+                }
+            }
+        }
+        let solution = ata.cholesky()?.solve(&atb);
+        let control_points_px = (0..n)
+            .map(|i| [solution[(i, 0)], solution[(i, 1)]])
+            .collect();
+        let spline = BSpline {
+            degree,
+            control_points_px,
+            knots,
+        };
+        Some(spline)
+    }
+
+    /// The curve's point at `s` (clamped to [0, 1]), by de Boor's
+    /// algorithm.
+    pub fn point(&self, s: f64) -> [f64; 2] {
+        let n = self.control_points_px.len();
+        if n == 0 || self.knots.len() != n + self.degree + 1 {
+            return [f64::NAN, f64::NAN];
+        }
+        let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
+        let span = find_span(&self.knots, self.degree, n, s);
+        let b = basis(&self.knots, self.degree, span, s);
+        let first = span - self.degree;
+        b.iter().enumerate().fold([0.0, 0.0], |acc, (k, &w)| {
+            let c = self.control_points_px[first + k];
+            [acc[0] + w * c[0], acc[1] + w * c[1]]
+        })
+    }
+
+    /// `count` points at uniform s from 0 to 1 inclusive.
+    pub fn sample(&self, count: usize) -> Vec<[f64; 2]> {
+        match count {
+            0 => Vec::new(),
+            1 => vec![self.point(0.5)],
+            _ => (0..count)
+                .map(|i| self.point(i as f64 / (count - 1) as f64))
+                .collect(),
+        }
+    }
+
+    /// The image-plane angle (atan2(dy, dx), y down) of the chord from
+    /// s = 0.45 to s = 0.55: the paper's grasp direction.
+    pub fn grasp_direction_rad(&self) -> f64 {
+        let a = self.point(0.45);
+        let b = self.point(0.55);
+        (b[1] - a[1]).atan2(b[0] - a[0])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn a_straight_line_is_reproduced_with_s_as_length_fraction() {
+        let pts: Vec<[f64; 2]> = (0..=100).map(|i| [i as f64, 2.0 * i as f64]).collect();
+        let spline = BSpline::fit(&pts, 5).unwrap();
+        let mid = spline.point(0.5);
+        assert!(
+            (mid[0] - 50.0).abs() < 1e-3 && (mid[1] - 100.0).abs() < 1e-3,
+            "{mid:?}"
+        );
+        let ends = (spline.point(0.0), spline.point(1.0));
+        assert!(
+            (ends.0[0]).abs() < 1e-3 && (ends.1[0] - 100.0).abs() < 1e-3,
+            "{ends:?}"
+        );
+        let dir = spline.grasp_direction_rad();
+        assert!((dir - 2.0f64.atan2(1.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_circle_arc_is_followed_within_a_tenth_of_a_pixel() {
+        let pts: Vec<[f64; 2]> = (0..=300)
+            .map(|i| {
+                let t = std::f64::consts::PI * i as f64 / 300.0;
+                [200.0 + 100.0 * t.cos(), 200.0 + 100.0 * t.sin()]
+            })
+            .collect();
+        let spline = BSpline::fit(&pts, control_points_for_length(314.0)).unwrap();
+        for p in spline.sample(50) {
+            let r = (p[0] - 200.0).hypot(p[1] - 200.0);
+            assert!((r - 100.0).abs() < 0.1, "r = {r}");
+        }
+        let mid = spline.point(0.5);
+        assert!(
+            (mid[0] - 200.0).abs() < 0.5 && (mid[1] - 300.0).abs() < 0.5,
+            "{mid:?}"
+        );
+    }
+
+    #[test]
+    fn degenerate_inputs_give_none_or_lower_degree() {
+        assert!(BSpline::fit(&[], 4).is_none());
+        assert!(BSpline::fit(&[[1.0, 1.0]], 4).is_none());
+        assert!(BSpline::fit(&[[1.0, 1.0], [1.0, 1.0]], 4).is_none());
+        assert!(BSpline::fit(&[[f64::NAN, 1.0], [2.0, 1.0]], 4).is_none());
+        let two = BSpline::fit(&[[0.0, 0.0], [10.0, 0.0]], 4).unwrap();
+        assert_eq!(two.degree, 1);
+        let mid = two.point(0.5);
+        assert!((mid[0] - 5.0).abs() < 1e-6, "{mid:?}");
+    }
+
+    proptest! {
+        #[test]
+        fn fitted_points_stay_near_a_smooth_curve(
+            a in -0.002f64..0.002, b in -1.0f64..1.0, c in 0.0f64..400.0, n in 20usize..400
+        ) {
+            let pts: Vec<[f64; 2]> = (0..n).map(|i| {
+                let x = i as f64;
+                [x, a * x * x + b * x + c]
+            }).collect();
+            let spline = BSpline::fit(&pts, control_points_for_length(n as f64)).unwrap();
+            for (k, p) in spline.sample(20).iter().enumerate() {
+                let y = a * p[0] * p[0] + b * p[0] + c;
+                prop_assert!((p[1] - y).abs() < 0.5, "sample {} at {:?}: curve y {}", k, p, y);
+                prop_assert!(p[0] >= -0.5 && p[0] <= n as f64, "x {}", p[0]);
+            }
+        }
+    }
+}

@@ -1,0 +1,272 @@
+//! The paper's instance method (ARIADNE: De Gregorio et al., "Let's take a
+//! Walk on Superpixels Graphs: Deformable Linear Objects Segmentation and
+//! Model Estimation", ACCV 2018, arXiv 1810.04461): SLIC superpixels on
+//! the masked image, their region adjacency graph, and walks from each end
+//! node that always step to the neighbour continuing the walk's direction
+//! best, so that a walk goes straight through a crossing.
+//!
+//! cablecell's simplification: a walk's step is chosen by direction alone
+//! (ARIADNE also weighs colour similarity and a learnt prior).
+
+use std::collections::HashSet;
+
+use opencv::core::{self, Mat, Rect};
+use opencv::imgproc;
+use opencv::prelude::*;
+use opencv::ximgproc::{self, SuperpixelSLICTrait, SuperpixelSLICTraitConst};
+
+use super::error::{VisionError, cv};
+use super::mask::continuous;
+use super::skeleton::{CablePath, FoundPaths};
+
+/// Superpixel side, in cable widths: about two, so that a cable is one
+/// superpixel across and each node has a clear direction to its next.
+const REGION_WIDTHS: f64 = 2.0;
+/// SLIC iterations: the centres settle within a few.
+const SLIC_ITERATIONS: i32 = 4;
+/// SLIC's compactness: high, so superpixels stay blob-shaped along the
+/// cable instead of following colour noise.
+const SLIC_RULER: f32 = 20.0;
+/// A walk covering more than this fraction of nodes that earlier walks
+/// took is the same cable again (walked from a stray node beside it).
+const MAX_SHARED_FRACTION: f64 = 0.5;
+/// A walk stops rather than turn by more than this at one step.
+const MAX_TURN_RAD: f64 = 1.0;
+/// A walk's heading is the direction over this many past nodes: longer
+/// than one step so a crossing's irregular nodes do not divert it.
+const HEADING_NODES: usize = 3;
+
+struct Nodes {
+    centres_px: Vec<[f64; 2]>,
+    neighbours: Vec<Vec<usize>>,
+}
+
+/// Superpixel nodes within the mask and their adjacency, in the crop's
+/// coordinates.
+fn graph(image: &Mat, mask: &Mat, region_px: i32) -> Result<Nodes, VisionError> {
+    let mut masked = Mat::default();
+    image
+        .copy_to_masked(&mut masked, mask)
+        .map_err(cv("mask image for superpixels"))?;
+    let mut slic =
+        ximgproc::create_superpixel_slic(&masked, ximgproc::SLICO, region_px, SLIC_RULER)
+            .map_err(cv("create SLIC"))?;
+    slic.iterate(SLIC_ITERATIONS).map_err(cv("iterate SLIC"))?;
+    let mut labels = Mat::default();
+    slic.get_labels(&mut labels)
+        .map_err(cv("superpixel labels"))?;
+    let labels = continuous(&labels)?;
+    let label = labels
+        .data_typed::<i32>()
+        .map_err(cv("read superpixel labels"))?;
+    let mask = continuous(mask)?;
+    let on = mask.data_bytes().map_err(cv("read mask"))?;
+    let cols = usize::try_from(mask.cols()).unwrap_or(0);
+
+    // Nodes: the connected pieces of each superpixel within the mask (a
+    // superpixel may reach over the background to a second cable).
+    let n = label.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let neighbours_of = |i: usize| {
+        let right = (i % cols + 1 < cols).then_some(i + 1);
+        let down = Some(i + cols).filter(|&j| j < n);
+        [right, down].into_iter().flatten()
+    };
+    for i in 0..n {
+        if on[i] == 0 {
+            continue;
+        }
+        for j in neighbours_of(i) {
+            if on[j] != 0 && label[j] == label[i] {
+                let (ri, rj) = (root(&mut parent, i), root(&mut parent, j));
+                parent[ri] = rj;
+            }
+        }
+    }
+    let mut node_of_root = vec![usize::MAX; n];
+    let mut node_at = vec![usize::MAX; n];
+    let mut sums: Vec<[f64; 3]> = Vec::new();
+    for i in 0..n {
+        if on[i] == 0 {
+            continue;
+        }
+        let r = root(&mut parent, i);
+        if node_of_root[r] == usize::MAX {
+            node_of_root[r] = sums.len();
+            sums.push([0.0; 3]);
+        }
+        let id = node_of_root[r];
+        node_at[i] = id;
+        sums[id][0] += (i % cols) as f64;
+        sums[id][1] += (i / cols) as f64;
+        sums[id][2] += 1.0;
+    }
+    let centres_px: Vec<[f64; 2]> = sums.iter().map(|s| [s[0] / s[2], s[1] / s[2]]).collect();
+    let mut pairs = HashSet::new();
+    for i in 0..n {
+        let a = node_at[i];
+        if a == usize::MAX {
+            continue;
+        }
+        for j in neighbours_of(i) {
+            let b = node_at[j];
+            if b != usize::MAX && b != a {
+                pairs.insert((a.min(b), a.max(b)));
+            }
+        }
+    }
+    let mut neighbours = vec![Vec::new(); centres_px.len()];
+    let mut pairs: Vec<(usize, usize)> = pairs.into_iter().collect();
+    pairs.sort_unstable();
+    for (a, b) in pairs {
+        neighbours[a].push(b);
+        neighbours[b].push(a);
+    }
+    Ok(Nodes {
+        centres_px,
+        neighbours,
+    })
+}
+
+fn unit(a: [f64; 2], b: [f64; 2]) -> Option<[f64; 2]> {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let n = dx.hypot(dy);
+    (n > 0.0).then(|| [dx / n, dy / n])
+}
+
+/// The walk from end node `start`: each step to the unvisited neighbour
+/// whose direction turns least from the heading, stopping at a turn above
+/// [`MAX_TURN_RAD`].
+fn walk(nodes: &Nodes, start: usize) -> Vec<usize> {
+    let mut path = vec![start];
+    let mut on_path = HashSet::from([start]);
+    let mut cur = start;
+    loop {
+        let here = nodes.centres_px[cur];
+        let back = path[path.len().saturating_sub(HEADING_NODES + 1)];
+        let heading = unit(nodes.centres_px[back], here);
+        let next = nodes.neighbours[cur]
+            .iter()
+            .filter(|n| !on_path.contains(*n))
+            .filter_map(|&n| {
+                let dir = unit(here, nodes.centres_px[n])?;
+                let turn = match heading {
+                    Some(h) => (h[0] * dir[0] + h[1] * dir[1]).clamp(-1.0, 1.0).acos(),
+                    None => 0.0,
+                };
+                Some((turn, n))
+            })
+            .filter(|&(turn, _)| turn <= MAX_TURN_RAD)
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match next {
+            Some((_, n)) => {
+                path.push(n);
+                on_path.insert(n);
+                cur = n;
+            }
+            None => break,
+        }
+    }
+    path
+}
+
+/// The cables' typical width from the mask's distance transform: across a
+/// strip of width w the distance to the edge runs from about 1 to w/2, so
+/// its mean is about (w/2 + 1)/2.
+fn width_px(mask: &Mat) -> Result<f64, VisionError> {
+    let mut distance = Mat::default();
+    imgproc::distance_transform(mask, &mut distance, imgproc::DIST_L2, 3, core::CV_32F)
+        .map_err(cv("distance transform"))?;
+    let mean = core::mean(&distance, mask).map_err(cv("mean distance"))?;
+    Ok((4.0 * mean[0] - 2.0).max(1.0))
+}
+
+/// Finds the cables in `mask` (CV_8U, non-zero = cable) over `image` (same
+/// size, any channels) by walks on the superpixel graph.
+pub fn paths_from_mask(
+    image: &Mat,
+    mask: &Mat,
+    min_length_px: f64,
+) -> Result<FoundPaths, VisionError> {
+    let width_px = width_px(mask)?;
+    let empty = FoundPaths {
+        paths: Vec::new(),
+        width_px,
+    };
+    let bbox = imgproc::bounding_rect(mask).map_err(cv("mask extent"))?;
+    if bbox.width <= 0 || bbox.height <= 0 || width_px.is_nan() || width_px <= 0.0 {
+        return Ok(empty);
+    }
+    let region_px = (REGION_WIDTHS * width_px).round().max(4.0) as i32;
+    let pad = region_px;
+    let crop = Rect::new(
+        bbox.x - pad,
+        bbox.y - pad,
+        bbox.width + 2 * pad,
+        bbox.height + 2 * pad,
+    ) & Rect::new(0, 0, mask.cols(), mask.rows());
+    let image_crop = Mat::roi(image, crop)
+        .and_then(|m| m.try_clone())
+        .map_err(cv("crop image for superpixels"))?;
+    let mask_crop = Mat::roi(mask, crop)
+        .and_then(|m| m.try_clone())
+        .map_err(cv("crop mask for superpixels"))?;
+    let nodes = graph(&image_crop, &mask_crop, region_px)?;
+
+    // Walk from every end node, then keep the walks longest first, each
+    // only if most of its nodes are new: a walk stopped short at a crossing,
+    // or one from a stray node beside a cable, repeats a longer one.
+    let mut walks: Vec<Vec<usize>> = (0..nodes.centres_px.len())
+        .filter(|&n| nodes.neighbours[n].len() == 1)
+        .map(|start| walk(&nodes, start))
+        .collect();
+    walks.sort_by_key(|w| std::cmp::Reverse(w.len()));
+    let mut taken = vec![false; nodes.centres_px.len()];
+    let mut paths = Vec::new();
+    let offset = [f64::from(crop.x), f64::from(crop.y)];
+    for path in walks {
+        let shared = path.iter().filter(|&&n| taken[n]).count();
+        if shared as f64 > MAX_SHARED_FRACTION * path.len() as f64 {
+            continue;
+        }
+        for &n in &path {
+            taken[n] = true;
+        }
+        let mut points_px: Vec<[f64; 2]> = path
+            .iter()
+            .map(|&n| {
+                let c = nodes.centres_px[n];
+                [c[0] + offset[0], c[1] + offset[1]]
+            })
+            .collect();
+        if let (Some(first), Some(last)) = (points_px.first().copied(), points_px.last().copied())
+            && (last[0], last[1]) < (first[0], first[1])
+        {
+            points_px.reverse();
+        }
+        let length_px = points_px
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum();
+        if length_px >= min_length_px {
+            paths.push(CablePath {
+                points_px,
+                length_px,
+            });
+        }
+    }
+    paths.sort_by(|a, b| {
+        let (pa, pb) = (a.points_px[0], b.points_px[0]);
+        (pa[0], pa[1])
+            .partial_cmp(&(pb[0], pb[1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    Ok(FoundPaths { paths, width_px })
+}

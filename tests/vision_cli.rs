@@ -1,0 +1,238 @@
+//! `cablecell detect` and `cablecell eval-vision` on images the test
+//! draws itself (plain backgrounds, so the classical mask applies and no
+//! network is needed).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use cablecell::perception::vision::synthetic::{
+    Background, SyntheticCable, draw_scene, segment_px,
+};
+use opencv::core::{CV_8U, Mat, Point, Scalar, Vector};
+use opencv::prelude::*;
+use opencv::{imgcodecs, imgproc};
+
+fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
+        .output()
+        .expect("cablecell runs")
+}
+
+fn text(path: &Path) -> &str {
+    path.to_str().expect("utf-8 path")
+}
+
+fn cable(from: [f64; 2], to: [f64; 2]) -> SyntheticCable {
+    SyntheticCable {
+        centreline_px: segment_px(from, to),
+        bgr: [30.0, 30.0, 30.0],
+        width_px: 7,
+    }
+}
+
+/// Draws `cables` on a plain light background into DIR/STEM.png, with the
+/// cables-dev ground truth beside it when `truth` is set.
+fn write_scene(dir: &Path, stem: &str, cables: Vec<SyntheticCable>, truth: bool) -> PathBuf {
+    let scene = draw_scene(480, 640, Background::Plain { gray: 200.0 }, cables, 7).expect("scene");
+    let path = dir.join(format!("{stem}.png"));
+    assert!(imgcodecs::imwrite(text(&path), &scene.image, &Vector::new()).expect("write"));
+    if truth {
+        let mut union = Mat::zeros(480, 640, CV_8U)
+            .expect("zeros")
+            .to_mat()
+            .expect("mat");
+        let mut lines = String::new();
+        for (k, cable) in scene.cables.iter().enumerate() {
+            let points: Vector<Point> = cable
+                .centreline_px
+                .iter()
+                .map(|p| Point::new(p[0] as i32, p[1] as i32))
+                .collect();
+            let mut curves = Vector::<Vector<Point>>::new();
+            curves.push(points);
+            let mut mask = Mat::zeros(480, 640, CV_8U)
+                .expect("zeros")
+                .to_mat()
+                .expect("mat");
+            let white = Scalar::all(255.0);
+            imgproc::polylines(
+                &mut mask,
+                &curves,
+                false,
+                white,
+                cable.width_px,
+                imgproc::LINE_8,
+                0,
+            )
+            .expect("draw");
+            imgproc::polylines(
+                &mut union,
+                &curves,
+                false,
+                white,
+                cable.width_px,
+                imgproc::LINE_8,
+                0,
+            )
+            .expect("draw");
+            assert!(
+                imgcodecs::imwrite(
+                    text(&dir.join(format!("{stem}_mask_{k}.png"))),
+                    &mask,
+                    &Vector::new()
+                )
+                .expect("write")
+            );
+            let pairs: Vec<String> = cable
+                .centreline_px
+                .iter()
+                .step_by(10)
+                .map(|p| format!("{} {}", p[0], p[1]))
+                .collect();
+            lines += &format!("{} {}\n", pairs.len(), pairs.join(" "));
+        }
+        assert!(
+            imgcodecs::imwrite(
+                text(&dir.join(format!("{stem}_mask_all.png"))),
+                &union,
+                &Vector::new()
+            )
+            .expect("write")
+        );
+        std::fs::write(dir.join(format!("{stem}.txt")), lines).expect("write polylines");
+    }
+    path
+}
+
+#[test]
+fn detect_finds_one_cable_its_grasp_point_and_direction() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let image = write_scene(
+        dir.path(),
+        "one",
+        vec![cable([100.0, 100.0], [540.0, 380.0])],
+        false,
+    );
+    let (masks, overlay) = (dir.path().join("masks"), dir.path().join("overlay"));
+    let out = cablecell(&[
+        "detect",
+        text(&image),
+        "--json",
+        "--masks",
+        text(&masks),
+        "--overlay",
+        text(&overlay),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let report = &reports[0];
+    assert_eq!(report["mask_used"], "classical");
+    assert_eq!(report["plain_background"], true);
+    let cables = report["cables"].as_array().expect("cables");
+    assert_eq!(cables.len(), 1);
+    let grasp = &cables[0]["grasp_px"];
+    let (x, y) = (grasp[0].as_f64().expect("x"), grasp[1].as_f64().expect("y"));
+    assert!((x - 320.0).hypot(y - 240.0) < 5.0, "grasp at ({x}, {y})");
+    let direction = cables[0]["direction_rad"].as_f64().expect("direction");
+    let expected = (280.0_f64).atan2(440.0);
+    assert!(
+        (direction - expected).abs() < 0.05,
+        "{direction} vs {expected}"
+    );
+    assert!(
+        report["timings_ms"]
+            .as_array()
+            .is_some_and(|t| !t.is_empty())
+    );
+    for file in ["one_mask_0.png", "one_mask_all.png"] {
+        let mask =
+            imgcodecs::imread(text(&masks.join(file)), imgcodecs::IMREAD_GRAYSCALE).expect("read");
+        assert_eq!((mask.cols(), mask.rows()), (640, 480), "{file}");
+    }
+    assert!(overlay.join("one.png").is_file());
+}
+
+#[test]
+fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let empty = write_scene(dir.path(), "empty", Vec::new(), false);
+    let out = cablecell(&["detect", text(&empty), "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(0));
+
+    let bogus = dir.path().join("bogus.png");
+    std::fs::write(&bogus, "not a picture").expect("write");
+    let out = cablecell(&["detect", text(&bogus)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("bogus.png: not an image OpenCV can decode")
+    );
+}
+
+#[test]
+fn a_missing_network_is_a_clear_error() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let image = write_scene(
+        dir.path(),
+        "net",
+        vec![cable([50.0, 240.0], [590.0, 240.0])],
+        false,
+    );
+    let out = cablecell(&[
+        "detect",
+        text(&image),
+        "--mask",
+        "network",
+        "--model",
+        "/no/such/model.onnx",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/no/such/model.onnx"), "{err}");
+}
+
+#[test]
+fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_scene(
+        dir.path(),
+        "00000",
+        vec![cable([80.0, 120.0], [560.0, 360.0])],
+        true,
+    );
+    write_scene(
+        dir.path(),
+        "00001",
+        vec![
+            cable([80.0, 100.0], [560.0, 380.0]),
+            cable([80.0, 380.0], [560.0, 100.0]),
+        ],
+        true,
+    );
+    let out = cablecell(&["eval-vision", text(dir.path()), "--json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(e["images"], 2);
+    assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
+    assert_eq!(e["count_right"]["successes"], 2, "{e}");
+    assert!(
+        e["grasp_error_px"]["max"].as_f64().expect("grasp") < 3.0,
+        "{e}"
+    );
+    assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
+    let human = cablecell(&["eval-vision", text(dir.path())]);
+    assert!(String::from_utf8_lossy(&human.stdout).contains("instance count right"));
+}
