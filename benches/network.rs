@@ -1,0 +1,68 @@
+//! The segmentation network on one 640 × 480 BGR image, pre- and
+//! post-processing included (resize down, ONNX Runtime with 2 intra-op
+//! threads, resize the probability up, threshold): what `SegmentationNet::
+//! mask` costs the detector per camera frame. Uses the first held-out
+//! photograph of cables-dev when it lies beside the project, else a drawn
+//! image. The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
+//! `.setup/onnxruntime/` (run `scripts/setup`).
+
+use std::path::PathBuf;
+
+use cablecell::perception::vision::network::SegmentationNet;
+use criterion::{Criterion, criterion_group, criterion_main};
+use opencv::core::{CV_8UC3, Mat, Point, Scalar, Vector};
+use opencv::prelude::*;
+use opencv::{imgcodecs, imgproc};
+
+fn image(root: &std::path::Path) -> Mat {
+    let photo = root.join("../shared/data/cables-dev/00030.jpg");
+    if let Ok(image) = imgcodecs::imread(&photo, imgcodecs::IMREAD_COLOR)
+        && !image.empty()
+    {
+        return image;
+    }
+    let mut image =
+        Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::new(200.0, 210.0, 220.0, 0.0))
+            .expect("allocating the bench image");
+    let cable: Vector<Point> = (0..=60)
+        .map(|i| {
+            Point::new(
+                60 + 9 * i,
+                240 + ((f64::from(i) / 6.0).sin() * 100.0) as i32,
+            )
+        })
+        .collect();
+    imgproc::polylines(
+        &mut image,
+        &Vector::<Vector<Point>>::from_iter([cable]),
+        false,
+        Scalar::new(30.0, 30.0, 190.0, 0.0),
+        6,
+        imgproc::LINE_AA,
+        0,
+    )
+    .expect("drawing the bench image");
+    image
+}
+
+fn bench(c: &mut Criterion) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let library = std::env::var_os("ORT_DYLIB_PATH")
+        .filter(|p| !p.is_empty())
+        .map_or_else(
+            || root.join(".setup/onnxruntime/libonnxruntime.so.1.31.1"),
+            PathBuf::from,
+        );
+    let mut net =
+        match SegmentationNet::load(&root.join("models/cable_segmentation.onnx"), &library) {
+            Ok(net) => net,
+            Err(e) => panic!("{e}"),
+        };
+    let image = image(&root);
+    c.bench_function("network mask 640x480", |b| {
+        b.iter(|| net.mask(std::hint::black_box(&image)).expect("inference"));
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

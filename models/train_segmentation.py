@@ -1,0 +1,533 @@
+#!/usr/bin/env python3
+"""Trains cablecell's cable segmentation network and exports it to ONNX.
+
+The network turns a BGR camera image into the probability, per pixel, that
+the pixel belongs to an electrical cable. It is a small (185k parameters)
+U-Net that runs at half the camera's resolution (320x240 for a 640x480
+image); the Rust side (src/perception/vision/network.rs) resizes the image
+down, runs the model with ONNX Runtime, resizes the probability map back up
+and thresholds it.
+
+Data:
+- real photographs: the cables-dev folder (images 00000..00044 of the
+  `cable_dataset_simple` part of the "Cables Dataset" of De Gregorio, Palli
+  and Di Stefano, from "Let's take a Walk on Superpixels Graphs: Deformable
+  Linear Objects Segmentation and Model Estimation", arXiv 1810.04461).
+  Images 00000..00029 train; 00030..00044 are held out and only measured.
+- synthetic images made here: smooth random curves of random colours and
+  widths drawn with anti-aliased thick polylines over plain colours,
+  gradients, noise textures, stripes, checkers, printed-like patterns and
+  wood-like textures, under random lighting and noise. Their masks are exact
+  by construction.
+
+The exported model's contract (what Rust must do) is in models/README.md:
+input `bgr`, float32, shape [1, H, W, 3] (NHWC), the image's B, G, R
+values as they are (0..255, no scaling: the model normalises inside); H and
+W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
+[0, 1].
+
+Run:
+    python3 -m venv .venv-train
+    .venv-train/bin/pip install -r models/requirements.txt
+    .venv-train/bin/python models/train_segmentation.py --out models/cable_segmentation.onnx
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+# The camera's size and the size the network runs at.
+FULL_W, FULL_H = 640, 480
+NET_W, NET_H = 320, 240
+
+# Per-channel normalisation applied inside the model, in B, G, R order, on
+# values scaled to [0, 1]. Rust feeds raw 0..255 values.
+MEAN_BGR = (0.5, 0.5, 0.5)
+STD_BGR = (0.25, 0.25, 0.25)
+
+TRAIN_IDS = list(range(0, 30))
+HELD_OUT_IDS = list(range(30, 45))
+
+
+# --------------------------------------------------------------------------
+# Model
+# --------------------------------------------------------------------------
+
+
+class ConvBnAct(nn.Sequential):
+    def __init__(self, cin: int, cout: int, k: int = 3, stride: int = 1, act: bool = True):
+        layers: list[nn.Module] = [
+            nn.Conv2d(cin, cout, k, stride=stride, padding=k // 2, bias=False),
+            nn.BatchNorm2d(cout),
+        ]
+        if act:
+            layers.append(nn.ReLU(inplace=True))
+        super().__init__(*layers)
+
+
+class CableNet(nn.Module):
+    """A tiny U-Net of plain 3x3 convolutions (on 2 CPU cores they train
+    several times faster than depthwise-separable ones and run as fast in
+    ONNX Runtime at this size): an encoder of five scales (1 .. 1/16, two
+    convolutions each, strided at the start of each scale), and a decoder that
+    upsamples bilinearly, adds a 1x1-projected skip and convolves once per
+    scale; a 1x1 head gives one logit per pixel."""
+
+    def __init__(self, widths: tuple[int, ...] = (16, 24, 32, 48, 64)):
+        super().__init__()
+        w0, w1, w2, w3, w4 = widths
+        mean = torch.tensor(MEAN_BGR).view(1, 3, 1, 1) * 255.0
+        std = torch.tensor(STD_BGR).view(1, 3, 1, 1) * 255.0
+        self.register_buffer("mean", mean, persistent=False)
+        self.register_buffer("std", std, persistent=False)
+        self.enc0 = nn.Sequential(ConvBnAct(3, w0), ConvBnAct(w0, w0))
+        self.enc1 = nn.Sequential(ConvBnAct(w0, w1, stride=2), ConvBnAct(w1, w1))
+        self.enc2 = nn.Sequential(ConvBnAct(w1, w2, stride=2), ConvBnAct(w2, w2))
+        self.enc3 = nn.Sequential(ConvBnAct(w2, w3, stride=2), ConvBnAct(w3, w3))
+        self.enc4 = nn.Sequential(ConvBnAct(w3, w4, stride=2), ConvBnAct(w4, w4))
+        self.lat3 = nn.Conv2d(w3, w4, 1)
+        self.dec3 = ConvBnAct(w4, w3)
+        self.lat2 = nn.Conv2d(w2, w3, 1)
+        self.dec2 = ConvBnAct(w3, w2)
+        self.lat1 = nn.Conv2d(w1, w2, 1)
+        self.dec1 = ConvBnAct(w2, w1)
+        self.lat0 = nn.Conv2d(w0, w1, 1)
+        self.dec0 = ConvBnAct(w1, w0)
+        self.head = nn.Conv2d(w0, 1, 1)
+
+    @staticmethod
+    def _up(x: torch.Tensor) -> torch.Tensor:
+        return F.interpolate(x, scale_factor=2.0, mode="bilinear", align_corners=False)
+
+    def logits(self, x_nchw_255: torch.Tensor) -> torch.Tensor:
+        x = (x_nchw_255 - self.mean) / self.std
+        s0 = self.enc0(x)
+        s1 = self.enc1(s0)
+        s2 = self.enc2(s1)
+        s3 = self.enc3(s2)
+        s4 = self.enc4(s3)
+        d = self.dec3(self._up(s4) + self.lat3(s3))
+        d = self.dec2(self._up(d) + self.lat2(s2))
+        d = self.dec1(self._up(d) + self.lat1(s1))
+        d = self.dec0(self._up(d) + self.lat0(s0))
+        return self.head(d)
+
+    def forward(self, bgr_nhwc: torch.Tensor) -> torch.Tensor:
+        """The exported graph: NHWC BGR 0..255 in, probability out."""
+        x = bgr_nhwc.permute(0, 3, 1, 2)
+        return torch.sigmoid(self.logits(x))
+
+
+# --------------------------------------------------------------------------
+# Synthetic images
+# --------------------------------------------------------------------------
+
+
+def _smooth_noise(rng: np.random.Generator, h: int, w: int, scale: float) -> np.ndarray:
+    """Noise in [0, 1] with features about `scale` pixels across."""
+    sh, sw = max(2, int(h / scale)), max(2, int(w / scale))
+    small = rng.random((sh, sw)).astype(np.float32)
+    big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    lo, hi = float(big.min()), float(big.max())
+    return (big - lo) / max(hi - lo, 1e-6)
+
+
+def _random_colour(rng: np.random.Generator, sat_lo: int = 0) -> np.ndarray:
+    hsv = np.uint8([[[rng.integers(0, 180), rng.integers(sat_lo, 256), rng.integers(20, 256)]]])
+    return cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0, 0].astype(np.float32)
+
+
+def _background(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    kind = rng.integers(0, 7)
+    c1 = _random_colour(rng)
+    c2 = _random_colour(rng)
+    if rng.random() < 0.5:  # pale, like paper, cloth and table tops
+        c1 = 255 - (255 - c1) * rng.uniform(0.1, 0.5)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    if kind == 0:  # plain
+        t = np.zeros((h, w), np.float32)
+    elif kind == 1:  # linear gradient
+        a = rng.uniform(0, 2 * math.pi)
+        t = (xx * math.cos(a) + yy * math.sin(a))
+        t = (t - t.min()) / max(float(t.max() - t.min()), 1e-6)
+    elif kind == 2:  # noise texture
+        t = _smooth_noise(rng, h, w, rng.uniform(3, 60))
+    elif kind == 3:  # stripes
+        a = rng.uniform(0, math.pi)
+        period = rng.uniform(6, 60)
+        t = (np.sin((xx * math.cos(a) + yy * math.sin(a)) * 2 * math.pi / period) > rng.uniform(-0.5, 0.5)).astype(np.float32)
+    elif kind == 4:  # checker
+        p = rng.uniform(8, 60)
+        t = ((np.floor(xx / p) + np.floor(yy / p)) % 2).astype(np.float32)
+    elif kind == 5:  # wood: rings distorted by low-frequency noise
+        a = rng.uniform(0, math.pi)
+        u = xx * math.cos(a) + yy * math.sin(a)
+        warp = _smooth_noise(rng, h, w, rng.uniform(40, 160)) * rng.uniform(10, 60)
+        period = rng.uniform(4, 20)
+        t = 0.5 + 0.5 * np.sin((u + warp) * 2 * math.pi / period)
+        t = t ** rng.uniform(1, 4)
+        c1 = np.float32([rng.uniform(120, 200), rng.uniform(170, 225), rng.uniform(200, 250)])
+        c2 = c1 * rng.uniform(0.6, 0.9)
+    else:  # printed-like: blocks, circles, text, thin straight lines
+        t = np.zeros((h, w), np.float32)
+    c1 = c1.reshape(1, 1, 3)
+    c2 = c2.reshape(1, 1, 3)
+    if kind != 0:
+        contrast = rng.uniform(0.05, 1.0)
+        c2 = c1 + (c2 - c1) * contrast
+    img = c1 * (1 - t[..., None]) + c2 * t[..., None]
+    img = np.ascontiguousarray(img, dtype=np.float32)
+    if kind == 6 or rng.random() < 0.2:
+        for _ in range(rng.integers(1, 12)):
+            col = tuple(float(v) for v in _random_colour(rng))
+            shape = rng.integers(0, 4)
+            x0, y0 = int(rng.integers(0, w)), int(rng.integers(0, h))
+            if shape == 0:
+                cv2.rectangle(img, (x0, y0), (x0 + int(rng.integers(5, 120)), y0 + int(rng.integers(5, 90))), col, -1)
+            elif shape == 1:
+                cv2.circle(img, (x0, y0), int(rng.integers(3, 40)), col, -1, cv2.LINE_AA)
+            elif shape == 2:
+                text = "".join(chr(int(c)) for c in rng.integers(65, 91, rng.integers(3, 10)))
+                ink = np.zeros((h, w), np.uint8)  # putText draws on 8-bit images only
+                cv2.putText(ink, text, (x0, y0), int(rng.integers(0, 8)), rng.uniform(0.3, 1.5), 255, int(rng.integers(1, 3)), cv2.LINE_AA)
+                a = ink.astype(np.float32)[..., None] / 255
+                img[:] = img * (1 - a) + np.float32(col) * a
+            else:  # straight edges and rulers are not cables
+                x1, y1 = int(rng.integers(0, w)), int(rng.integers(0, h))
+                cv2.line(img, (x0, y0), (x1, y1), col, int(rng.integers(1, 4)), cv2.LINE_AA)
+    return img
+
+
+def _curve(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """A smooth random curve: a walk whose curvature drifts slowly, like a
+    bent wire. Returns N x 2 float points (x, y)."""
+    x, y = rng.uniform(-0.1 * w, 1.1 * w), rng.uniform(-0.1 * h, 1.1 * h)
+    a = rng.uniform(0, 2 * math.pi)
+    length = rng.uniform(0.3, 1.4) * max(w, h)
+    step = 2.0
+    k = rng.normal(0, 0.02)
+    pts = []
+    for _ in range(int(length / step)):
+        pts.append((x, y))
+        k = 0.97 * k + rng.normal(0, 0.004)
+        k = float(np.clip(k, -0.06, 0.06))
+        a += k * step
+        x += step * math.cos(a)
+        y += step * math.sin(a)
+    return np.array(pts, np.float32)
+
+
+def _draw_cable(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, width: float) -> None:
+    pts = _curve(rng, *img.shape[:2])
+    if len(pts) < 4:
+        return
+    shift = 4
+    ipts = [np.round(pts * (1 << shift)).astype(np.int32).reshape(-1, 1, 2)]
+    t = max(1, int(round(width)))
+    colour = _random_colour(rng, sat_lo=rng.choice([0, 80]))
+    # a soft shadow under the cable
+    if rng.random() < 0.6:
+        shadow = np.zeros(img.shape[:2], np.float32)
+        off = rng.normal(0, 1.2, 2) * (1 << shift)
+        cv2.polylines(shadow, [ipts[0] + off.astype(np.int32)], False, 1.0, t + 2, cv2.LINE_AA, shift)
+        shadow = cv2.GaussianBlur(shadow, (0, 0), rng.uniform(0.8, 2.5))
+        img *= (1 - rng.uniform(0.1, 0.45) * shadow)[..., None]
+    layer = np.zeros(img.shape[:2], np.float32)
+    cv2.polylines(layer, ipts, False, 1.0, t, cv2.LINE_AA, shift)
+    body = np.empty_like(img)
+    body[:] = colour
+    # tube shading: a darker rim and a lighter highlight along the middle
+    if t >= 2 and rng.random() < 0.8:
+        core = np.zeros(img.shape[:2], np.float32)
+        cv2.polylines(core, ipts, False, 1.0, max(1, t // 2), cv2.LINE_AA, shift)
+        rim = rng.uniform(0.55, 0.95)
+        light = rng.uniform(1.0, 1.4)
+        body = body * (rim + (light - rim) * core[..., None])
+    img[:] = img * (1 - layer[..., None]) + body * layer[..., None]
+    cv2.polylines(mask, ipts, False, 1.0, t, cv2.LINE_8, shift)
+    # metal ferrules at the ends, as on the real wires (part of the wire)
+    if rng.random() < 0.5:
+        for end in (pts[:6], pts[-6:]):
+            e = [np.round(end * (1 << shift)).astype(np.int32).reshape(-1, 1, 2)]
+            grey = float(rng.uniform(120, 240))
+            cv2.polylines(img, e, False, (grey, grey, grey), t, cv2.LINE_AA, shift)
+
+
+def synthetic_sample(rng: np.random.Generator, h: int = NET_H, w: int = NET_W) -> tuple[np.ndarray, np.ndarray]:
+    """A synthetic BGR image (uint8) and its exact cable mask (float 0/1)."""
+    img = _background(rng, h, w)
+    mask = np.zeros((h, w), np.float32)
+    base_width = rng.uniform(2.0, 5.0)
+    for _ in range(rng.integers(1, 8)):
+        _draw_cable(rng, img, mask, base_width * rng.uniform(0.8, 1.25))
+    # lighting: a smooth multiplicative field and a colour cast
+    light = 1 + (_smooth_noise(rng, h, w, rng.uniform(80, 300)) - 0.5) * rng.uniform(0, 0.8)
+    img *= light[..., None] * rng.uniform(0.85, 1.15, 3).astype(np.float32) * rng.uniform(0.6, 1.2)
+    if rng.random() < 0.5:
+        img = cv2.GaussianBlur(img, (0, 0), rng.uniform(0.3, 1.0))
+    img += rng.normal(0, rng.uniform(0, 8), img.shape).astype(np.float32)
+    out = np.clip(img, 0, 255).astype(np.uint8)
+    if rng.random() < 0.5:
+        ok, enc = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(rng.integers(40, 95))])
+        if ok:
+            out = cv2.imdecode(enc, cv2.IMREAD_COLOR)
+    return out, mask
+
+
+# --------------------------------------------------------------------------
+# Real images
+# --------------------------------------------------------------------------
+
+
+def load_real(data: Path, ids: list[int], size: tuple[int, int] | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Images (BGR uint8) and union masks (float 0..1), resized to `size`
+    (w, h) with area averaging if given, else at full resolution (masks 0/1)."""
+    images, masks = [], []
+    for i in ids:
+        img = cv2.imread(str(data / f"{i:05d}.jpg"), cv2.IMREAD_COLOR)
+        m = cv2.imread(str(data / f"{i:05d}_mask_all.png"), cv2.IMREAD_GRAYSCALE)
+        if img is None or m is None:
+            raise FileNotFoundError(f"{data}: image or mask {i:05d} missing")
+        m = (m > 127).astype(np.float32)
+        if size is not None:
+            img = cv2.resize(img, size, interpolation=cv2.INTER_AREA)
+            m = cv2.resize(m, size, interpolation=cv2.INTER_AREA)
+        images.append(img)
+        masks.append(m)
+    return images, masks
+
+
+def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int) -> tuple[np.ndarray, np.ndarray]:
+    """A random crop x crop window of a randomly flipped, scaled, rotated and
+    recoloured image, with its mask warped alike."""
+    h, w = mask.shape
+    if rng.random() < 0.5:
+        img, mask = img[:, ::-1], mask[:, ::-1]
+    if rng.random() < 0.5:
+        img, mask = img[::-1], mask[::-1]
+    s = rng.uniform(0.75, 1.35) if rng.random() < 0.7 else 1.0
+    a = rng.uniform(-180, 180) if rng.random() < 0.5 else rng.uniform(-15, 15)
+    cx, cy = rng.uniform(crop / 2 / s, w - crop / 2 / s), rng.uniform(crop / 2 / s, h - crop / 2 / s)
+    mtx = cv2.getRotationMatrix2D((cx, cy), a, s)
+    mtx[:, 2] += (crop / 2 - cx, crop / 2 - cy)
+    img = cv2.warpAffine(np.ascontiguousarray(img), mtx, (crop, crop), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    mask = cv2.warpAffine(np.ascontiguousarray(mask), mtx, (crop, crop), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    img = img.astype(np.float32)
+    if rng.random() < 0.3:  # a different colour order: cables come in every colour
+        img = img[..., rng.permutation(3)]
+    if rng.random() < 0.4:  # hue shift
+        hsv = cv2.cvtColor(np.clip(img, 0, 255).astype(np.uint8), cv2.COLOR_BGR2HSV).astype(np.int32)
+        hsv[..., 0] = (hsv[..., 0] + rng.integers(0, 180)) % 180
+        img = cv2.cvtColor(hsv.astype(np.uint8), cv2.COLOR_HSV2BGR).astype(np.float32)
+    # brightness, contrast, per-channel gain, noise
+    img = (img - 128) * rng.uniform(0.7, 1.3) + 128 + rng.uniform(-30, 30)
+    img *= rng.uniform(0.9, 1.1, 3).astype(np.float32)
+    if rng.random() < 0.3:
+        img += rng.normal(0, rng.uniform(1, 6), img.shape).astype(np.float32)
+    return np.clip(img, 0, 255), np.ascontiguousarray(mask)
+
+
+# --------------------------------------------------------------------------
+# Training
+# --------------------------------------------------------------------------
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+    torch.use_deterministic_algorithms(True, warn_only=True)
+
+
+def loss_fn(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    bce = F.binary_cross_entropy_with_logits(logits, target, pos_weight=torch.tensor(2.0))
+    p = torch.sigmoid(logits)
+    inter = (p * target).sum(dim=(1, 2, 3))
+    dice = 1 - (2 * inter + 1) / (p.sum(dim=(1, 2, 3)) + target.sum(dim=(1, 2, 3)) + 1)
+    return bce + dice.mean()
+
+
+def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, crop: int, real_fraction: float):
+    xs, ys = [], []
+    for _ in range(batch):
+        if rng.random() < real_fraction:
+            j = rng.integers(0, len(real_imgs))
+            img, m = real_imgs[j], real_masks[j]
+        else:
+            j = rng.integers(0, len(synth_imgs))
+            img, m = synth_imgs[j], synth_masks[j]
+        img, m = augment(rng, img, m, crop)
+        xs.append(img)
+        ys.append(m)
+    x = torch.from_numpy(np.stack(xs)).permute(0, 3, 1, 2).contiguous(memory_format=torch.channels_last)
+    y = torch.from_numpy(np.stack(ys))[:, None]
+    y = (y > 0.5).float()
+    return x, y
+
+
+def train(args) -> CableNet:
+    rng = np.random.default_rng(args.seed)
+    t0 = time.time()
+    real_imgs, real_masks = load_real(args.data, TRAIN_IDS, (NET_W, NET_H))
+    synth = [synthetic_sample(rng) for _ in range(args.synthetic)]
+    synth_imgs = [s[0] for s in synth]
+    synth_masks = [s[1] for s in synth]
+    print(f"data: {len(real_imgs)} real, {len(synth_imgs)} synthetic in {time.time() - t0:.1f} s", flush=True)
+
+    model = CableNet().to(memory_format=torch.channels_last)
+    n_params = sum(p.numel() for p in model.parameters())
+    print(f"model: {n_params} parameters", flush=True)
+    opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=args.steps, pct_start=0.1)
+    model.train()
+    t_train = time.time()
+    running = 0.0
+    for step in range(1, args.steps + 1):
+        x, y = make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, args.batch, args.crop, args.real_fraction)
+        loss = loss_fn(model.logits(x), y)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        sched.step()
+        running = 0.95 * running + 0.05 * loss.item() if step > 1 else loss.item()
+        if step % 50 == 0 or step == args.steps:
+            el = time.time() - t_train
+            print(f"step {step}/{args.steps} loss {running:.4f} {el:.0f} s ({el / step:.2f} s/step)", flush=True)
+    model.eval()
+    print(f"training took {time.time() - t_train:.0f} s", flush=True)
+    return model.to(memory_format=torch.contiguous_format)
+
+
+# --------------------------------------------------------------------------
+# Export and evaluation (the same pipeline as the Rust code)
+# --------------------------------------------------------------------------
+
+
+def export(model: CableNet, out: Path) -> None:
+    import onnx
+
+    model.eval()
+    dummy = torch.zeros(1, NET_H, NET_W, 3)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    torch.onnx.export(
+        model,
+        (dummy,),
+        str(out),
+        dynamo=False,
+        opset_version=17,
+        input_names=["bgr"],
+        output_names=["cable_probability"],
+        dynamic_axes={"bgr": {1: "height", 2: "width"}, "cable_probability": {2: "height", 3: "width"}},
+        do_constant_folding=True,
+    )
+    m = onnx.load(str(out))
+    if m.ir_version > 13:
+        m.ir_version = 13
+    m.doc_string = (
+        "cablecell cable segmentation. Input bgr: float32 [1,H,W,3] NHWC, B,G,R 0..255 unscaled, "
+        "H and W multiples of 16 (320x240 for a 640x480 image). Output cable_probability: float32 [1,1,H,W]."
+    )
+    onnx.checker.check_model(m)
+    onnx.save(m, str(out))
+    print(f"exported {out}: {out.stat().st_size} bytes, IR version {m.ir_version}, opset {m.opset_import[0].version}", flush=True)
+
+
+def net_size(w: int, h: int) -> tuple[int, int]:
+    """The network's input size for an image of w x h: half size, rounded to
+    multiples of 16 (the same rule as network.rs)."""
+    return max(1, round(w / 32)) * 16, max(1, round(h / 32)) * 16
+
+
+def predict(session, img: np.ndarray) -> np.ndarray:
+    """Probability at the image's full size, as network.rs computes it."""
+    h, w = img.shape[:2]
+    nw, nh = net_size(w, h)
+    small = cv2.resize(img, (nw, nh), interpolation=cv2.INTER_AREA).astype(np.float32)[None]
+    prob = session.run(None, {"bgr": small})[0][0, 0]
+    return cv2.resize(prob, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def evaluate(onnx_path: Path, data: Path, ids: list[int], thresholds: list[float]) -> dict:
+    import onnxruntime as ort
+
+    so = ort.SessionOptions()
+    so.intra_op_num_threads = 2
+    session = ort.InferenceSession(str(onnx_path), so, providers=["CPUExecutionProvider"])
+    images, masks = load_real(data, ids, None)
+    results = {}
+    for t in thresholds:
+        ious, dices = [], []
+        for img, m in zip(images, masks):
+            pred = predict(session, img) > t
+            gt = m > 0.5
+            inter = float(np.logical_and(pred, gt).sum())
+            union = float(np.logical_or(pred, gt).sum())
+            ious.append(inter / max(union, 1))
+            dices.append(2 * inter / max(float(pred.sum() + gt.sum()), 1))
+        results[t] = {"iou": float(np.mean(ious)), "dice": float(np.mean(dices)), "dice_min": float(np.min(dices))}
+    # inference time of the network alone at 320x240, median of 50 runs
+    x = np.zeros((1, NET_H, NET_W, 3), np.float32)
+    for _ in range(5):
+        session.run(None, {"bgr": x})
+    times = []
+    for _ in range(50):
+        s = time.perf_counter()
+        session.run(None, {"bgr": x})
+        times.append(time.perf_counter() - s)
+    results["median_ms"] = 1000 * float(np.median(times))
+    return results
+
+
+def main() -> int:
+    here = Path(__file__).resolve().parent
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", type=Path, default=here.parent.parent / "shared" / "data" / "cables-dev",
+                        help="the cables-dev folder (default: ../shared/data/cables-dev from the project's root)")
+    parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx")
+    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--steps", type=int, default=2400)
+    parser.add_argument("--batch", type=int, default=16)
+    parser.add_argument("--crop", type=int, default=160, help="side of the square training crops, in network pixels")
+    parser.add_argument("--lr", type=float, default=4e-3)
+    parser.add_argument("--synthetic", type=int, default=1500, help="synthetic images generated up front")
+    parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--eval-only", action="store_true", help="measure an existing --out model")
+    args = parser.parse_args()
+
+    torch.set_num_threads(args.threads)
+    seed_everything(args.seed)
+    if not args.data.is_dir():
+        print(f"no data at {args.data}", file=sys.stderr)
+        return 2
+    t0 = time.time()
+    if not args.eval_only:
+        model = train(args)
+        export(model, args.out)
+        print(f"training and export took {time.time() - t0:.0f} s", flush=True)
+    thresholds = [0.3, 0.4, 0.5, 0.6, 0.7]
+    train_res = evaluate(args.out, args.data, TRAIN_IDS, thresholds)
+    held_res = evaluate(args.out, args.data, HELD_OUT_IDS, thresholds)
+    for t in thresholds:
+        print(f"threshold {t}: train IoU {train_res[t]['iou']:.4f} DICE {train_res[t]['dice']:.4f} | "
+              f"held-out IoU {held_res[t]['iou']:.4f} DICE {held_res[t]['dice']:.4f} (min {held_res[t]['dice_min']:.4f})")
+    print(f"onnxruntime median inference at {NET_W}x{NET_H}, 2 threads: {held_res['median_ms']:.2f} ms")
+    print(json.dumps({"held_out": {str(k): v for k, v in held_res.items()}}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,272 @@
+//! The segmentation network end to end: the shipped model through ONNX
+//! Runtime on images made here (a drawn cable on a plain and on a textured
+//! background), its errors (a missing model, a missing or invalid runtime
+//! library, a wrong image), and its accuracy on the held-out real photographs
+//! of cables-dev when that folder is beside the project.
+//!
+//! The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
+//! `.setup/onnxruntime/libonnxruntime.so.1.31.1` (put there by
+//! `scripts/setup`).
+
+use std::path::{Path, PathBuf};
+
+use cablecell::perception::vision::network::{NetworkError, SegmentationNet};
+use opencv::core::{CV_8U, CV_8UC1, CV_8UC3, Mat, Point, Scalar, Vector};
+use opencv::prelude::*;
+use opencv::{imgcodecs, imgproc};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn runtime_library() -> PathBuf {
+    match std::env::var_os("ORT_DYLIB_PATH") {
+        Some(path) if !path.is_empty() => PathBuf::from(path),
+        _ => root().join(".setup/onnxruntime/libonnxruntime.so.1.31.1"),
+    }
+}
+
+fn model() -> PathBuf {
+    root().join("models/cable_segmentation.onnx")
+}
+
+fn net() -> SegmentationNet {
+    let library = runtime_library();
+    assert!(
+        library.is_file(),
+        "ONNX Runtime library {} not found: run scripts/setup or set ORT_DYLIB_PATH",
+        library.display()
+    );
+    match SegmentationNet::load(&model(), &library) {
+        Ok(net) => net,
+        Err(e) => panic!("loading the shipped model: {e}"),
+    }
+}
+
+/// A smooth S-shaped cable across a 640 × 480 image: its polyline.
+fn cable_polyline() -> Vector<Point> {
+    (0..=100)
+        .map(|i| {
+            let t = f64::from(i) / 100.0;
+            let x = 80.0 + 480.0 * t;
+            let y = 240.0 + 120.0 * (t * std::f64::consts::TAU).sin() + 40.0 * t;
+            Point::new(x.round() as i32, y.round() as i32)
+        })
+        .collect()
+}
+
+/// Draws the cable (6 px wide, a darker rim and a lighter core, as a round
+/// wire looks) on `background`; returns the image and the cable's exact mask.
+fn draw_cable(background: Mat, colour: Scalar) -> (Mat, Mat) {
+    let mut image = background;
+    let line = Vector::<Vector<Point>>::from_iter([cable_polyline()]);
+    let rim = colour * 0.75;
+    imgproc::polylines(&mut image, &line, false, rim, 6, imgproc::LINE_AA, 0).unwrap();
+    imgproc::polylines(&mut image, &line, false, colour, 3, imgproc::LINE_AA, 0).unwrap();
+    let mut mask = Mat::new_rows_cols_with_default(480, 640, CV_8UC1, Scalar::all(0.0)).unwrap();
+    imgproc::polylines(
+        &mut mask,
+        &line,
+        false,
+        Scalar::all(255.0),
+        6,
+        imgproc::LINE_8,
+        0,
+    )
+    .unwrap();
+    (image, mask)
+}
+
+/// Recall (share of the cable found) and false-positive rate (share of the
+/// background marked) of `predicted` against `truth`.
+fn recall_and_false_positives(predicted: &Mat, truth: &Mat) -> (f64, f64) {
+    let p = predicted.data_bytes().unwrap();
+    let t = truth.data_bytes().unwrap();
+    let (mut hit, mut cable, mut false_pos, mut background) = (0u64, 0u64, 0u64, 0u64);
+    for (&p, &t) in p.iter().zip(t) {
+        if t > 127 {
+            cable += 1;
+            hit += u64::from(p > 127);
+        } else {
+            background += 1;
+            false_pos += u64::from(p > 127);
+        }
+    }
+    (
+        hit as f64 / cable as f64,
+        false_pos as f64 / background as f64,
+    )
+}
+
+fn dice_and_iou(predicted: &Mat, truth: &Mat) -> (f64, f64) {
+    let p = predicted.data_bytes().unwrap();
+    let t = truth.data_bytes().unwrap();
+    let (mut inter, mut np, mut nt) = (0u64, 0u64, 0u64);
+    for (&p, &t) in p.iter().zip(t) {
+        let (p, t) = (p > 127, t > 127);
+        inter += u64::from(p && t);
+        np += u64::from(p);
+        nt += u64::from(t);
+    }
+    let dice = 2.0 * inter as f64 / (np + nt).max(1) as f64;
+    let iou = inter as f64 / (np + nt - inter).max(1) as f64;
+    (dice, iou)
+}
+
+fn check_mask(mask: &Mat) {
+    assert_eq!((mask.cols(), mask.rows()), (640, 480));
+    assert_eq!(mask.typ(), CV_8UC1);
+    assert!(
+        mask.data_bytes()
+            .unwrap()
+            .iter()
+            .all(|&v| v == 0 || v == 255)
+    );
+}
+
+#[test]
+fn finds_a_drawn_cable_on_a_plain_background() {
+    let mut net = net();
+    let background =
+        Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::new(205.0, 215.0, 220.0, 0.0))
+            .unwrap();
+    let (image, truth) = draw_cable(background, Scalar::new(40.0, 40.0, 200.0, 0.0));
+    let mask = net.mask(&image).unwrap();
+    check_mask(&mask);
+    let (recall, false_pos) = recall_and_false_positives(&mask, &truth);
+    eprintln!("plain background: recall {recall:.3}, false positives {false_pos:.4}");
+    // measured with the shipped model: recall 0.988, false positives 0.0023
+    assert!(recall >= 0.9, "recall {recall}");
+    assert!(false_pos <= 0.01, "false positives {false_pos}");
+}
+
+/// A wood-like texture: grain stripes warped by a slow wave, with noise.
+fn wood(seed: u64) -> Mat {
+    let mut image = Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::all(0.0)).unwrap();
+    let mut state = seed;
+    let bytes = image.data_bytes_mut().unwrap();
+    for y in 0..480usize {
+        for x in 0..640usize {
+            // xorshift noise, a few grey levels
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let noise = (state % 13) as f64 - 6.0;
+            let (xf, yf) = (x as f64, y as f64);
+            let grain = (0.5 + 0.5 * ((yf + 18.0 * (xf / 90.0).sin()) / 7.0).sin()).powi(3);
+            let shade = 1.0 - 0.22 * grain;
+            let i = 3 * (y * 640 + x);
+            bytes[i] = (150.0 * shade + noise).clamp(0.0, 255.0) as u8;
+            bytes[i + 1] = (200.0 * shade + noise).clamp(0.0, 255.0) as u8;
+            bytes[i + 2] = (232.0 * shade + noise).clamp(0.0, 255.0) as u8;
+        }
+    }
+    image
+}
+
+#[test]
+fn finds_a_drawn_cable_on_a_textured_background() {
+    let mut net = net();
+    let (image, truth) = draw_cable(
+        wood(0x9e37_79b9_7f4a_7c15),
+        Scalar::new(170.0, 90.0, 30.0, 0.0),
+    );
+    let mask = net.mask(&image).unwrap();
+    check_mask(&mask);
+    let (recall, false_pos) = recall_and_false_positives(&mask, &truth);
+    eprintln!("textured background: recall {recall:.3}, false positives {false_pos:.4}");
+    // measured with the shipped model: recall 0.985, false positives 0.0029
+    assert!(recall >= 0.9, "recall {recall}");
+    assert!(false_pos <= 0.01, "false positives {false_pos}");
+}
+
+#[test]
+fn a_missing_model_is_reported() {
+    let missing = root().join("models/no-such-model.onnx");
+    match SegmentationNet::load(&missing, &runtime_library()) {
+        Err(NetworkError::ModelMissing { path, .. }) => assert_eq!(path, missing),
+        other => panic!("expected ModelMissing, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_missing_runtime_library_is_reported() {
+    let missing = root().join(".setup/onnxruntime/libonnxruntime.so.0.0.0-missing");
+    let err = SegmentationNet::load(&model(), &missing).unwrap_err();
+    match &err {
+        NetworkError::Runtime { library, .. } => assert_eq!(library, &missing),
+        other => panic!("expected Runtime, got {other:?}"),
+    }
+    assert!(err.to_string().contains("scripts/setup"), "{err}");
+}
+
+#[test]
+fn an_invalid_runtime_library_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("libonnxruntime.so.1.31.1");
+    std::fs::write(&fake, b"not a shared library").unwrap();
+    match SegmentationNet::load(&model(), &fake) {
+        Err(NetworkError::Runtime { library, .. }) => assert_eq!(library, fake),
+        other => panic!("expected Runtime, got {other:?}"),
+    }
+    // the real library still loads afterwards in the same process
+    let _ = net();
+}
+
+#[test]
+fn a_wrong_image_is_reported() {
+    let mut net = net();
+    let gray = Mat::new_rows_cols_with_default(480, 640, CV_8U, Scalar::all(0.0)).unwrap();
+    assert!(matches!(net.mask(&gray), Err(NetworkError::Image { .. })));
+    assert!(matches!(
+        net.mask(&Mat::default()),
+        Err(NetworkError::Image { .. })
+    ));
+}
+
+/// The held-out photographs 00030..00044 of cables-dev (not used in
+/// training): mean union DICE at threshold 0.5. Measured with the shipped
+/// model: DICE 0.6118, IoU 0.4425 (models/README.md says why the masks'
+/// approximate edges hold it there); this allows 0.02 less.
+const HELD_OUT_MIN_DICE: f64 = 0.59;
+
+#[test]
+fn held_out_real_photographs() {
+    let data = root().join("../shared/data/cables-dev");
+    if !data.is_dir() {
+        eprintln!(
+            "skipped: {} is absent (cables-dev lies beside the project only on the development machines)",
+            data.display()
+        );
+        return;
+    }
+    let mut net = net();
+    let (mut dice_sum, mut iou_sum, mut n) = (0.0, 0.0, 0);
+    for i in 30..45 {
+        let image = read(&data, &format!("{i:05}.jpg"), imgcodecs::IMREAD_COLOR);
+        let truth = read(
+            &data,
+            &format!("{i:05}_mask_all.png"),
+            imgcodecs::IMREAD_GRAYSCALE,
+        );
+        let mask = net.mask(&image).unwrap();
+        let (dice, iou) = dice_and_iou(&mask, &truth);
+        eprintln!("{i:05}: DICE {dice:.4}, IoU {iou:.4}");
+        dice_sum += dice;
+        iou_sum += iou;
+        n += 1;
+    }
+    let (dice, iou) = (dice_sum / f64::from(n), iou_sum / f64::from(n));
+    eprintln!("held-out mean: DICE {dice:.4}, IoU {iou:.4}");
+    assert!(
+        dice >= HELD_OUT_MIN_DICE,
+        "mean DICE {dice} < {HELD_OUT_MIN_DICE}"
+    );
+}
+
+fn read(dir: &Path, name: &str, flags: i32) -> Mat {
+    let path = dir.join(name);
+    let image = imgcodecs::imread(&path, flags).unwrap();
+    assert!(!image.empty(), "cannot read {}", path.display());
+    image
+}
