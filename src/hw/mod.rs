@@ -63,6 +63,16 @@ pub enum DeviceError {
     },
 }
 
+/// Whether a read error only means that nothing arrived before the port's
+/// own timeout: the caller keeps its deadline and reads again.
+pub fn nothing_arrived(error: &std::io::Error) -> bool {
+    use std::io::ErrorKind;
+    matches!(
+        error.kind(),
+        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+    )
+}
+
 impl DeviceError {
     pub fn device(&self) -> DeviceKind {
         match self {

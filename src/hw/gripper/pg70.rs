@@ -1,11 +1,12 @@
 //! The Schunk PG70 over SMP, on any byte stream: a serial port in the lab,
 //! a pseudo-terminal to an emulator in the tests.
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
 use super::smp::{self, Decoder, Frame, Reply, command};
 use super::{GripOutcome, Gripper};
+use crate::hw::nothing_arrived;
 use crate::hw::{DeviceError, DeviceKind};
 
 pub struct Pg70<T: Read + Write + Send> {
@@ -113,11 +114,7 @@ impl<T: Read + Write + Send> Pg70<T> {
             match self.port.read(&mut buffer) {
                 Ok(0) => return Err(self.gone(name, "the port closed")),
                 Ok(n) => self.decoder.push(&buffer[..n]),
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) => {}
+                Err(e) if nothing_arrived(&e) => {}
                 Err(e) => return Err(self.io_error(name, &e)),
             }
         }

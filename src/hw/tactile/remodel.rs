@@ -6,13 +6,14 @@
 //! input buffer and reads against its own deadline: a late byte of an old
 //! answer must never be taken for the start of a new one.
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{Read, Write};
 use std::time::{Duration, Instant};
 
 use serialport::{ClearBuffer, SerialPort};
 
 use super::{TactileFrame, TactileSensor};
 use crate::hw::clock::Clock;
+use crate::hw::nothing_arrived;
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::{RawFrame, TAXEL_COUNT};
 
@@ -118,11 +119,7 @@ impl<L: SerialLink> RemodelTactile<L> {
             match self.link.read(&mut answer[filled..]) {
                 Ok(0) => return Err(self.lost(name, "the port closed")),
                 Ok(n) => filled += n,
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) => {}
+                Err(e) if nothing_arrived(&e) => {}
                 Err(e) => return Err(self.lost(name, &e.to_string())),
             }
         }

@@ -2,10 +2,11 @@
 //! refusals before referencing, the spontaneous end-of-move messages, and
 //! an object between the jaws that blocks a grip.
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::hw::gripper::smp::{Decoder, Frame, Group, command, state_bits};
+use crate::hw::nothing_arrived;
 
 /// Ways the emulated module can misbehave.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,12 +103,7 @@ impl Pg70Emulator {
             match port.read(&mut buffer) {
                 Ok(0) => return,
                 Ok(n) => decoder.push(&buffer[..n]),
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) =>
-                {
+                Err(e) if nothing_arrived(&e) => {
                     continue;
                 }
                 Err(_) => return,

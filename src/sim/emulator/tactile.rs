@@ -2,9 +2,10 @@
 //! REMODEL firmware does, its samples taken from a source (the simulated
 //! pad, in the emulated cell), and can misbehave.
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::hw::nothing_arrived;
 use crate::perception::tactile::{RawFrame, TAXEL_COUNT};
 
 /// Ways the emulated microcontroller can misbehave.
@@ -79,12 +80,7 @@ impl<S: FnMut() -> RawFrame> TactileEmulator<S> {
             let n = match port.read(&mut buffer) {
                 Ok(0) => return,
                 Ok(n) => n,
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                    ) =>
-                {
+                Err(e) if nothing_arrived(&e) => {
                     continue;
                 }
                 Err(_) => return,
