@@ -83,7 +83,11 @@ fn id_count_and_samples_in_taxel_order() {
     let second = bench.driver.read().expect("sample");
     assert_eq!(second.raw, frame(2));
     assert!(second.t_s >= first.t_s);
-    assert_eq!(first.raw[24], 0x0F0 + 2400 + 1, "12-bit values above 255 survive");
+    assert_eq!(
+        first.raw[24],
+        0x0F0 + 2400 + 1,
+        "12-bit values above 255 survive"
+    );
 }
 
 #[test]
