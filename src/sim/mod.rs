@@ -7,6 +7,7 @@
 pub mod cable;
 pub mod emulator;
 pub mod motion;
+pub mod render;
 pub mod tactile_model;
 pub mod world;
 

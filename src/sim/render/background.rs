@@ -1,0 +1,306 @@
+//! The backgrounds, as CV_32FC3 images in gray levels (0–255): each kind
+//! draws its colours, scales and layout from the render's generator.
+
+use std::f64::consts::TAU;
+
+use opencv::core::{self, Mat, Point, Rect, Scalar, Size, Vec3f};
+use opencv::imgproc;
+use opencv::prelude::*;
+use rand::{Rng, RngExt};
+
+use super::{Background, RenderError, cv, pixels_mut};
+
+/// Draws `background` at the given size.
+pub(super) fn draw(
+    background: &Background,
+    width: i32,
+    height: i32,
+    rng: &mut impl Rng,
+) -> Result<Mat, RenderError> {
+    match background {
+        Background::Plain { bgr } => filled(width, height, bgr.map(f64::from)),
+        Background::Gradient => gradient(width, height, rng),
+        Background::Noise => noise(width, height, rng),
+        Background::Stripes => stripes(width, height, rng),
+        Background::Checker => checker(width, height, rng),
+        Background::Wood => wood(width, height, rng),
+        Background::Printed => printed(width, height, rng),
+    }
+}
+
+fn filled(width: i32, height: i32, bgr: [f64; 3]) -> Result<Mat, RenderError> {
+    Mat::new_rows_cols_with_default(
+        height,
+        width,
+        core::CV_32FC3,
+        Scalar::new(bgr[0], bgr[1], bgr[2], 0.0),
+    )
+    .map_err(cv("allocate the background"))
+}
+
+/// A random colour of middling saturation with its lightness in `lightness`.
+fn colour(rng: &mut impl Rng, lightness: std::ops::Range<f64>) -> [f64; 3] {
+    let level = rng.random_range(lightness);
+    let tint = rng.random_range(0.0..60.0);
+    [0; 3].map(|_| (level + rng.random_range(-tint..=tint)).clamp(0.0, 255.0))
+}
+
+/// `base` moved by up to `by` gray levels per channel.
+fn near(rng: &mut impl Rng, base: [f64; 3], by: f64) -> [f64; 3] {
+    base.map(|c| (c + rng.random_range(-by..=by)).clamp(0.0, 255.0))
+}
+
+fn mix(a: [f64; 3], b: [f64; 3], t: f64) -> Vec3f {
+    Vec3f::from([0, 1, 2].map(|c| (a[c] + (b[c] - a[c]) * t) as f32))
+}
+
+/// Fills every pixel with `shade(x, y)`.
+fn per_pixel(
+    width: i32,
+    height: i32,
+    mut shade: impl FnMut(f64, f64) -> Vec3f,
+) -> Result<Mat, RenderError> {
+    let mut image = filled(width, height, [0.0; 3])?;
+    let pixels = pixels_mut(&mut image)?;
+    for (y, row) in pixels.chunks_exact_mut(width as usize).enumerate() {
+        for (x, pixel) in row.iter_mut().enumerate() {
+            *pixel = shade(x as f64, y as f64);
+        }
+    }
+    Ok(image)
+}
+
+fn gradient(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let a = colour(rng, 90.0..240.0);
+    let b = near(rng, a, 40.0);
+    let (sin, cos) = rng.random_range(0.0..TAU).sin_cos();
+    let extent = (f64::from(width) * cos).abs() + (f64::from(height) * sin).abs();
+    let (cx, cy) = (f64::from(width) / 2.0, f64::from(height) / 2.0);
+    per_pixel(width, height, |x, y| {
+        mix(a, b, 0.5 + ((x - cx) * cos + (y - cy) * sin) / extent)
+    })
+}
+
+/// Random values at a coarse grid of `cells_x` × `cells_y`, smoothly
+/// enlarged to the image: CV_32FC`channels`, values in [-1, 1].
+fn smooth_noise(
+    width: i32,
+    height: i32,
+    cells_x: i32,
+    cells_y: i32,
+    channels: i32,
+    rng: &mut impl Rng,
+) -> Result<Mat, RenderError> {
+    let count = (cells_x * cells_y * channels) as usize;
+    let values: Vec<f32> = (0..count).map(|_| rng.random_range(-1.0..=1.0)).collect();
+    let coarse = Mat::from_slice(&values)
+        .and_then(|m| m.reshape(channels, cells_y).and_then(|m| m.try_clone()))
+        .map_err(cv("shape the coarse noise"))?;
+    let mut fine = Mat::default();
+    imgproc::resize(
+        &coarse,
+        &mut fine,
+        Size::new(width, height),
+        0.0,
+        0.0,
+        imgproc::INTER_CUBIC,
+    )
+    .map_err(cv("enlarge the coarse noise"))?;
+    Ok(fine)
+}
+
+/// Mottled colour: a base colour moved by noise at three scales, each
+/// channel on its own, plus grain.
+fn noise(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let base = colour(rng, 60.0..220.0);
+    let mut image = filled(width, height, base)?;
+    let scale_px = rng.random_range(8.0..40.0);
+    for (octave, amplitude) in [(1.0, 45.0), (4.0, 25.0), (12.0, 12.0)] {
+        let cells =
+            |side: i32| ((f64::from(side) / (scale_px * 12.0) * octave).ceil() as i32).max(2);
+        let layer = smooth_noise(width, height, cells(width), cells(height), 3, rng)?;
+        let mut sum = Mat::default();
+        core::scale_add(&layer, amplitude, &image, &mut sum).map_err(cv("add a noise octave"))?;
+        image = sum;
+    }
+    Ok(image)
+}
+
+fn stripes(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let a = colour(rng, 40.0..240.0);
+    let b = colour(rng, 40.0..240.0);
+    let period = rng.random_range(6.0..60.0);
+    // Where the sine crosses this level sets the share of each colour.
+    let level: f64 = rng.random_range(-0.6..0.6);
+    let (sin, cos) = rng.random_range(0.0..TAU).sin_cos();
+    // Edges about a pixel wide: the sine's slope where it crosses the level.
+    let sharpness = period / (TAU * (1.0 - level * level).sqrt());
+    per_pixel(width, height, |x, y| {
+        let wave = (TAU * (x * cos + y * sin) / period).sin();
+        mix(a, b, (0.5 + (wave - level) * sharpness).clamp(0.0, 1.0))
+    })
+}
+
+fn checker(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let a = colour(rng, 40.0..240.0);
+    let b = colour(rng, 40.0..240.0);
+    let square = rng.random_range(8.0..70.0);
+    let (sin, cos) = rng.random_range(0.0..TAU).sin_cos();
+    per_pixel(width, height, |x, y| {
+        let u = ((x * cos + y * sin) / square).floor() as i64;
+        let v = ((y * cos - x * sin) / square).floor() as i64;
+        mix(a, b, ((u + v).rem_euclid(2)) as f64)
+    })
+}
+
+/// Growth rings (bands across the grain, bent by smooth noise) and fine
+/// streaks along the grain over a brown or pale wood colour.
+fn wood(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let light = [
+        rng.random_range(90.0..170.0),
+        rng.random_range(140.0..200.0),
+        rng.random_range(180.0..235.0),
+    ];
+    let dark_by = rng.random_range(0.45..0.75);
+    let dark = light.map(|c| c * dark_by);
+    let ring_px = rng.random_range(12.0..45.0);
+    let warp_px = rng.random_range(10.0..60.0);
+    let (sin, cos) = rng.random_range(0.0..TAU).sin_cos();
+    let warp = smooth_noise(width, height, 4, 4, 1, rng)?;
+    let warp = warp.data_typed::<f32>().map_err(cv("read the warp"))?;
+    // Streaks: a random profile across the grain, one value per pixel.
+    let across = (f64::from(width).hypot(f64::from(height)) * 2.0).ceil() as usize + 2;
+    let streaks: Vec<f64> = (0..across).map(|_| rng.random_range(-1.0..=1.0)).collect();
+    let mut i = 0;
+    per_pixel(width, height, |x, y| {
+        let u = x * cos + y * sin;
+        let bent = u + warp_px * f64::from(warp[i]);
+        i += 1;
+        let ring = 0.5 + 0.5 * (TAU * bent / ring_px).sin();
+        let ring = ring * ring;
+        let streak = streaks[(u + across as f64 / 2.0).clamp(0.0, (across - 1) as f64) as usize];
+        mix(light, dark, (0.8 * ring + 0.15 * streak).clamp(0.0, 1.0))
+    })
+}
+
+/// Letters that make text-like blobs.
+const LETTERS: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+
+/// Paper with printed rectangles, discs, lines, curves and text.
+fn printed(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let level = rng.random_range(200.0..250.0);
+    let paper = near(rng, [level; 3], 12.0);
+    let mut image = Mat::new_rows_cols_with_default(
+        height,
+        width,
+        core::CV_8UC3,
+        Scalar::new(paper[0], paper[1], paper[2], 0.0),
+    )
+    .map_err(cv("allocate the paper"))?;
+    let area = f64::from(width) * f64::from(height);
+    let items = ((area / 8000.0) * rng.random_range(0.5..1.5)).ceil() as usize;
+    let side = width.max(height);
+    for _ in 0..items {
+        let ink = colour(rng, 0.0..230.0);
+        let ink = Scalar::new(ink[0], ink[1], ink[2], 0.0);
+        let at = Point::new(rng.random_range(0..width), rng.random_range(0..height));
+        let thickness = rng.random_range(1..5);
+        match rng.random_range(0..5) {
+            0 => {
+                let size = Size::new(
+                    rng.random_range(4..side / 4 + 5),
+                    rng.random_range(4..side / 4 + 5),
+                );
+                let filled = if rng.random_bool(0.6) {
+                    imgproc::FILLED
+                } else {
+                    thickness
+                };
+                imgproc::rectangle(
+                    &mut image,
+                    Rect::from_point_size(at, size),
+                    ink,
+                    filled,
+                    imgproc::LINE_8,
+                    0,
+                )
+                .map_err(cv("print a rectangle"))?;
+            }
+            1 => {
+                let filled = if rng.random_bool(0.6) {
+                    imgproc::FILLED
+                } else {
+                    thickness
+                };
+                imgproc::circle(
+                    &mut image,
+                    at,
+                    rng.random_range(3..side / 10 + 4),
+                    ink,
+                    filled,
+                    imgproc::LINE_AA,
+                    0,
+                )
+                .map_err(cv("print a disc"))?;
+            }
+            2 => {
+                let to = Point::new(rng.random_range(0..width), rng.random_range(0..height));
+                imgproc::line(&mut image, at, to, ink, thickness, imgproc::LINE_AA, 0)
+                    .map_err(cv("print a line"))?;
+            }
+            3 => {
+                let axes = Size::new(
+                    rng.random_range(5..side / 5 + 6),
+                    rng.random_range(5..side / 5 + 6),
+                );
+                let start = rng.random_range(0.0..360.0);
+                imgproc::ellipse(
+                    &mut image,
+                    at,
+                    axes,
+                    rng.random_range(0.0..180.0),
+                    start,
+                    start + rng.random_range(60.0..300.0),
+                    ink,
+                    thickness,
+                    imgproc::LINE_AA,
+                    0,
+                )
+                .map_err(cv("print an arc"))?;
+            }
+            _ => {
+                let length = rng.random_range(2..12);
+                let text: String = (0..length)
+                    .map(|_| char::from(LETTERS[rng.random_range(0..LETTERS.len())]))
+                    .collect();
+                imgproc::put_text(
+                    &mut image,
+                    &text,
+                    at,
+                    rng.random_range(0..8),
+                    rng.random_range(0.4..2.5),
+                    ink,
+                    thickness.min(3),
+                    imgproc::LINE_AA,
+                    false,
+                )
+                .map_err(cv("print text"))?;
+            }
+        }
+    }
+    // Printing leaves no perfectly sharp edge.
+    let mut soft = Mat::default();
+    imgproc::gaussian_blur(
+        &image,
+        &mut soft,
+        Size::new(0, 0),
+        0.7,
+        0.7,
+        core::BORDER_REFLECT,
+    )
+    .map_err(cv("soften the print"))?;
+    let mut out = Mat::default();
+    soft.convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv("convert the paper"))?;
+    Ok(out)
+}
