@@ -3,6 +3,7 @@
 //! segmentation network), one instance per cable, a B-spline along each,
 //! and the grasp frame at its middle.
 
+pub mod calibration;
 pub mod error;
 pub mod eval;
 pub mod mask;
