@@ -2,22 +2,28 @@
 
 use crate::geometry::LineInSensor;
 use crate::hw::arm::{Arm, SimArm};
+use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
 use crate::hw::clock::{Clock, SimClock};
-use crate::hw::detector::{CableDetector, OracleDetector};
+use crate::hw::detector::{CableDetector, OracleDetector, VisionDetector};
 use crate::hw::gripper::{Gripper, SimGripper};
 use crate::hw::tactile::{SimTactile, TactileSensor};
+use crate::perception::vision::Pipeline;
+use crate::perception::vision::network::{LazyNetwork, runtime_library};
 use crate::sim::motion::CartesianLimits;
 use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};
 use crate::task::CellFile;
-use crate::task::cell_file::{ArmBackend, DetectorBackend, GripperBackend, TactileBackend};
+use crate::task::cell_file::{
+    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, TactileBackend,
+};
 
 pub struct Cell {
     pub name: String,
     pub arm: Box<dyn Arm>,
     pub gripper: Box<dyn Gripper>,
     pub tactile: Box<dyn TactileSensor>,
+    pub camera: Box<dyn Camera>,
     pub detector: Box<dyn CableDetector>,
     pub clock: Box<dyn Clock>,
     /// The simulated world, when there is one: it knows the truth.
@@ -67,11 +73,37 @@ impl Cell {
                 ))
             }
         };
+        let camera_config = &file.camera;
+        let camera: Box<dyn Camera> = match &camera_config.backend {
+            CameraBackend::Sim(sim) => Box::new(SimCamera::new(
+                world.clone(),
+                camera_config.intrinsics,
+                sim.base_from_camera.isometry(),
+                camera_config.marker.on_finger(),
+                sim.appearance(),
+                rng(seed, Stream::Camera),
+            )),
+            CameraBackend::Opencv(opencv) => Box::new(OpencvCamera::new(
+                opencv.source.clone(),
+                camera_config.intrinsics,
+            )),
+        };
         let detector: Box<dyn CableDetector> = match &file.detector.backend {
             DetectorBackend::Oracle(oracle) => Box::new(OracleDetector::new(
                 world.clone(),
                 oracle.clone(),
                 rng(seed, Stream::Detector),
+            )),
+            DetectorBackend::Vision(vision) => Box::new(VisionDetector::new(
+                Pipeline::new(vision.vision()),
+                LazyNetwork::new(
+                    vision.model.clone(),
+                    runtime_library(vision.onnxruntime.as_deref()),
+                ),
+                camera_config
+                    .calibration
+                    .as_ref()
+                    .map(|calibration| vision.image_to_base(camera_config.intrinsics, calibration)),
             )),
         };
         Self {
@@ -79,6 +111,7 @@ impl Cell {
             arm,
             gripper,
             tactile,
+            camera,
             detector,
             clock: Box::new(SimClock::new(world.clone())),
             world,

@@ -82,6 +82,24 @@ enum Command {
         #[arg(long)]
         overlay: Option<PathBuf>,
     },
+    /// Estimate the camera's pose in the base frame from the marker on the
+    /// finger: the arm shows the marker from the cell file's
+    /// `camera.calibration_poses`, and the pose is stored in the file's
+    /// `[camera.calibration]`.
+    CalibrateCamera {
+        /// The cell file.
+        #[arg(long, default_value = "config/cell.sim.toml")]
+        cell: PathBuf,
+        /// Seed of the simulated cell.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Speed of the arm between poses.
+        #[arg(long, default_value_t = 100.0)]
+        speed_mm_s: f64,
+        /// Print the calibration without storing it.
+        #[arg(long)]
+        dry_run: bool,
+    },
     /// Score the vision pipeline on a folder laid out like cables-dev
     /// (NNNNN.jpg, NNNNN_mask_K.png, NNNNN_mask_all.png, NNNNN.txt).
     EvalVision {
@@ -189,6 +207,12 @@ fn main() -> ExitCode {
             masks,
             overlay,
         } => cli::detect::detect(&images, &vision, json, masks.as_deref(), overlay.as_deref()),
+        Command::CalibrateCamera {
+            cell,
+            seed,
+            speed_mm_s,
+            dry_run,
+        } => cli::calibrate_camera::calibrate_camera(&cell, seed, speed_mm_s, dry_run),
         Command::EvalVision { dir, vision, json } => {
             cli::eval_vision::eval_vision(&dir, &vision, json)
         }

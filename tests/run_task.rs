@@ -5,6 +5,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
+use cablecell::task::cell_file::{DetectorBackend, OracleConfig};
 use cablecell::task::{CellFile, TaskFile, load_cell, load_task};
 
 fn root() -> &'static Path {
@@ -15,6 +16,24 @@ fn shipped() -> (TaskFile, CellFile) {
     let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");
     let cell = load_cell(&root().join("config/cell.sim.toml")).expect("cell");
     (task, cell)
+}
+
+/// `cell` with its vision detector replaced by an oracle that misses the
+/// true grasp frame by σ = 3 mm and 0.2 rad: trial grasps off by the
+/// paper's few millimetres, for the tests of the regrasp.
+fn with_oracle(mut cell: CellFile, position_noise_mm: f64, angle_noise_rad: f64) -> CellFile {
+    cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
+        position_noise_mm,
+        angle_noise_rad,
+        offset_across_mm: 0.0,
+        offset_angle_rad: 0.0,
+    });
+    cell
+}
+
+fn shipped_with_oracle() -> (TaskFile, CellFile) {
+    let (task, cell) = shipped();
+    (task, with_oracle(cell, 3.0, 0.2))
 }
 
 fn run(task: &TaskFile, cell: &CellFile, seed: u64) -> RunRecord {
@@ -63,7 +82,7 @@ fn the_task_reaches_tolerance_in_truth_for_every_seed() {
 
 #[test]
 fn the_regrasp_reduces_the_true_error() {
-    let (task, cell) = shipped();
+    let (task, cell) = shipped_with_oracle();
     let (mut trial, mut last) = (0.0, 0.0);
     for seed in 0..30 {
         let record = run(&task, &cell, seed);
@@ -87,7 +106,7 @@ fn the_regrasp_reduces_the_true_error() {
 
 #[test]
 fn the_sequence_visits_every_state_in_order() {
-    let (task, cell) = shipped();
+    let (task, cell) = shipped_with_oracle();
     // Seed 3 gives a trial grasp out of tolerance (checked below).
     let record = run(&task, &cell, 3);
     let states: Vec<_> = record.transitions.iter().map(|t| t.to).collect();
@@ -116,10 +135,8 @@ fn the_sequence_visits_every_state_in_order() {
 
 #[test]
 fn a_trial_grasp_within_tolerance_skips_the_regrasp() {
-    let (task, mut cell) = shipped();
-    let cablecell::task::cell_file::DetectorBackend::Oracle(oracle) = &mut cell.detector.backend;
-    oracle.position_noise_mm = 0.0;
-    oracle.angle_noise_rad = 0.0;
+    let (task, cell) = shipped();
+    let mut cell = with_oracle(cell, 0.0, 0.0);
     cell.world.cable_tilt_rad = 0.0;
     let record = run(&task, &cell, 5);
     assert!(
@@ -143,7 +160,7 @@ fn a_seed_reproduces_the_run_exactly() {
 
 #[test]
 fn no_regrasp_allowed_fails_the_task_when_the_trial_is_off() {
-    let (mut task, cell) = shipped();
+    let (mut task, cell) = shipped_with_oracle();
     task.regrasp.max_regrasps = 0;
     let record = run(&task, &cell, 3);
     match &record.outcome {
@@ -168,10 +185,10 @@ fn run_prints_transitions_poses_and_exits_zero() {
         text.contains("task regrasp on simulated cell (seed 3)"),
         "{text}"
     );
+    assert!(text.contains("detect → approach"), "{text}");
     assert!(text.contains("trial_grasp → evaluate"), "{text}");
     assert!(text.contains("(approach took"), "{text}");
     assert!(text.contains("trial grasp  estimate n "), "{text}");
-    assert!(text.contains("regrasp 1  estimate n "), "{text}");
     assert!(text.contains("success: within tolerance"), "{text}");
 }
 
@@ -189,7 +206,7 @@ fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
             .any(|s| s["state"] == "evaluate" && s["duration_s"].as_f64().is_some())
     );
     let grasps = report["grasps"].as_array().expect("grasps");
-    assert!(grasps.len() >= 2);
+    assert!(!grasps.is_empty());
     assert!(grasps[0]["estimated_error"]["n_mm"].as_f64().is_some());
     assert!(grasps[0]["truth"]["error"]["alpha_rad"].as_f64().is_some());
 }
@@ -197,10 +214,13 @@ fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
 #[test]
 fn a_silent_tactile_sensor_is_a_device_fault_and_keeps_the_record() {
     let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell");
-    let text = text.replace(
-        "noise_fraction = 0.02",
-        "noise_fraction = 0.02\nsilent_after_frames = 55",
-    );
+    let models = root().join("models");
+    let text = text
+        .replace(
+            "noise_fraction = 0.02",
+            "noise_fraction = 0.02\nsilent_after_frames = 55",
+        )
+        .replace("../models", models.to_str().expect("utf-8"));
     let dir = tempfile::tempdir().expect("tempdir");
     let cell = dir.path().join("cell.toml");
     std::fs::write(&cell, text).expect("write");

@@ -11,7 +11,7 @@ use crate::orchestrator::{RunOutcome, Runner};
 use crate::perception::tactile::Estimator;
 use crate::sim::{Stream, rng};
 use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
-use crate::task::cell_file::{ArmBackend, DetectorBackend, TactileBackend};
+use crate::task::cell_file::{ArmBackend, DetectorBackend, OracleConfig, TactileBackend};
 use crate::task::{CellFile, TaskFile};
 
 /// The seed of trial `index`: the same for every policy, and independent
@@ -57,11 +57,14 @@ impl Perturbation {
     /// The cell of this trial: the base cell with these values set.
     pub fn apply(&self, cell: &CellFile) -> CellFile {
         let mut cell = cell.clone();
-        let DetectorBackend::Oracle(oracle) = &mut cell.detector.backend;
-        oracle.offset_across_mm = self.start_offset_mm;
-        oracle.offset_angle_rad = self.start_angle_rad;
-        oracle.position_noise_mm = 0.0;
-        oracle.angle_noise_rad = 0.0;
+        // The paper's experiment starts each trial from a chosen offset: an
+        // oracle detector sets it, whatever detector the cell has.
+        cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
+            position_noise_mm: 0.0,
+            angle_noise_rad: 0.0,
+            offset_across_mm: self.start_offset_mm,
+            offset_angle_rad: self.start_angle_rad,
+        });
         let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
         tactile.noise_fraction = self.sensor_noise_fraction;
         cell.world.cable_diameter_mm = self.cable_diameter_mm;

@@ -4,18 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
-use cablecell::perception::vision::network::{NetworkError, SegmentationNet};
-use cablecell::perception::vision::{
-    InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError,
-};
+use cablecell::perception::vision::network::{LazyNetwork, runtime_library};
+use cablecell::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
 use clap::Args;
 use opencv::core::Mat;
 use opencv::imgcodecs;
 use opencv::prelude::*;
-
-/// Where the ONNX Runtime library is when neither --onnxruntime nor
-/// ORT_DYLIB_PATH says: where scripts/setup puts it.
-const DEFAULT_ONNXRUNTIME: &str = ".setup/onnxruntime/libonnxruntime.so.1.31.1";
 
 #[derive(Args, Debug, Clone)]
 pub struct VisionArgs {
@@ -65,42 +59,10 @@ impl VisionArgs {
     }
 
     pub fn network(&self) -> LazyNetwork {
-        let runtime = self
-            .onnxruntime
-            .clone()
-            .or_else(|| std::env::var_os("ORT_DYLIB_PATH").map(PathBuf::from))
-            .unwrap_or_else(|| PathBuf::from(DEFAULT_ONNXRUNTIME));
-        LazyNetwork {
-            model: self.model.clone(),
-            runtime,
-            loaded: None,
-        }
-    }
-}
-
-/// The network, loaded the first time a scene needs it: a plain
-/// background never pays for it.
-pub struct LazyNetwork {
-    model: PathBuf,
-    runtime: PathBuf,
-    loaded: Option<SegmentationNet>,
-}
-
-impl MaskNetwork for LazyNetwork {
-    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        let net = match &mut self.loaded {
-            Some(net) => net,
-            None => self
-                .loaded
-                .insert(SegmentationNet::load(&self.model, &self.runtime).map_err(network_error)?),
-        };
-        net.mask(bgr).map_err(network_error)
-    }
-}
-
-fn network_error(error: NetworkError) -> VisionError {
-    VisionError::Network {
-        reason: error.to_string(),
+        LazyNetwork::new(
+            self.model.clone(),
+            runtime_library(self.onnxruntime.as_deref()),
+        )
     }
 }
 

@@ -3,6 +3,7 @@
 //! them and implement the same traits.
 
 pub mod arm;
+pub mod camera;
 pub mod clock;
 pub mod detector;
 pub mod gripper;
@@ -17,6 +18,7 @@ pub enum DeviceKind {
     Arm,
     Gripper,
     Tactile,
+    Camera,
     Detector,
 }
 
@@ -26,6 +28,7 @@ impl std::fmt::Display for DeviceKind {
             DeviceKind::Arm => "arm",
             DeviceKind::Gripper => "gripper",
             DeviceKind::Tactile => "tactile sensor",
+            DeviceKind::Camera => "camera",
             DeviceKind::Detector => "detector",
         })
     }
@@ -61,6 +64,11 @@ pub enum DeviceError {
         port: String,
         detail: String,
     },
+    /// The device cannot do its job as set up: a missing model file or
+    /// ONNX Runtime library, a camera source that cannot be opened, an
+    /// uncalibrated camera. Fix the cell file or the installation.
+    #[error("{device}: {reason}")]
+    Unusable { device: DeviceKind, reason: String },
 }
 
 /// Whether a read error only means that nothing arrived before the port's
@@ -79,7 +87,8 @@ impl DeviceError {
             DeviceError::Timeout { device, .. }
             | DeviceError::Refused { device, .. }
             | DeviceError::Disconnected { device, .. }
-            | DeviceError::Garbled { device, .. } => *device,
+            | DeviceError::Garbled { device, .. }
+            | DeviceError::Unusable { device, .. } => *device,
         }
     }
 }

@@ -16,7 +16,10 @@ pub fn execute(cell: &mut Cell, command: &Command) -> Event {
             open_mm,
             bias_frames,
         } => prepare(cell, *open_mm, *bias_frames),
-        Command::Detect => cell.detector.detect().map(Event::Detected),
+        Command::Detect => cell
+            .detector
+            .detect(cell.camera.as_mut())
+            .map(Event::Detected),
         Command::MoveTo {
             base_from_tcp,
             speed_mm_s,

@@ -24,6 +24,7 @@ pub enum Stream {
     Detector = 4,
     /// A campaign trial's perturbation.
     Perturbation = 5,
+    Camera = 6,
 }
 
 /// The random stream `stream` of a cell seeded with `seed`.

@@ -1,10 +1,20 @@
 //! The cell file: which backend each device uses, with its limits and
 //! calibration. `config/cell.sim.toml` is the simulated cell.
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
+use opencv::core::Rect;
 use serde::Deserialize;
 
-use super::validate::{finite, fraction, non_negative, positive, vector3, voltage_range};
+use super::validate::{
+    camera_model, finite, fraction, non_negative, positive, unit_vector3, vector3, voltage_range,
+};
+use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
+use crate::perception::vision::grasp_frame::{ImageToBase, PlaneInBase};
+use crate::perception::vision::{InstanceMethod, MaskMethod, VisionConfig};
+use crate::sim::render::{Appearance, Background};
 
 /// A cell file, e.g. `config/cell.sim.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -14,6 +24,9 @@ pub struct CellFile {
     pub arm: ArmConfig,
     pub gripper: GripperConfig,
     pub tactile: TactileConfig,
+    /// The 2D camera that watches the cable, and the marker on the finger
+    /// that calibrates it.
+    pub camera: CameraConfig,
     pub detector: DetectorConfig,
     /// The simulated scene that the simulated devices share.
     pub world: WorldConfig,
@@ -145,6 +158,108 @@ pub struct SimTactileConfig {
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
+pub struct CameraConfig {
+    /// The camera's intrinsics (pinhole, no distortion; pixel centres at
+    /// integer coordinates).
+    #[serde(deserialize_with = "camera_model")]
+    pub intrinsics: CameraModel,
+    pub marker: MarkerConfig,
+    /// Where `cablecell calibrate-camera` puts the arm to show the marker
+    /// to the camera: poses of the TCP in the base frame, spread in
+    /// position, depth and angle (more than one pin down the marker's
+    /// tilt).
+    pub calibration_poses: Vec<FrameConfig>,
+    /// The camera's pose as `cablecell calibrate-camera` estimated it; the
+    /// vision detector needs it.
+    #[serde(default)]
+    pub calibration: Option<CalibrationConfig>,
+    pub backend: CameraBackend,
+}
+
+/// The ArUco marker fixed on one finger.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MarkerConfig {
+    pub dictionary: MarkerDictionary,
+    pub id: i32,
+    /// The side of the marker's black square.
+    #[serde(deserialize_with = "positive")]
+    pub side_mm: f64,
+    /// Where the marker sits on the hand (its centre, z out of its face).
+    pub tcp_from_marker: FrameConfig,
+}
+
+/// The ArUco dictionaries a marker may come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum MarkerDictionary {
+    #[serde(rename = "4x4_50")]
+    Aruco4x4_50,
+    #[serde(rename = "5x5_100")]
+    Aruco5x5_100,
+    #[serde(rename = "6x6_250")]
+    Aruco6x6_250,
+    #[serde(rename = "original")]
+    ArucoOriginal,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationConfig {
+    pub base_from_camera: FrameConfig,
+    /// How well the marker's corners fitted the pose (RMS, pixels).
+    #[serde(deserialize_with = "non_negative")]
+    pub reprojection_error_px: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum CameraBackend {
+    /// Renders the simulated world (see `sim::render`).
+    Sim(SimCameraConfig),
+    /// A real camera, a video file or a folder of images, read through
+    /// OpenCV.
+    Opencv(OpencvCameraConfig),
+}
+
+/// The simulated camera: where it really is, and how the scene looks.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimCameraConfig {
+    /// The camera's true pose, which calibration has to find.
+    pub base_from_camera: FrameConfig,
+    /// What the cable hangs in front of: `"gradient"`, `"noise"`,
+    /// `"stripes"`, `"checker"`, `"wood"`, `"printed"` or
+    /// `{ plain = { bgr = [b, g, r] } }`.
+    pub background: Background,
+    pub cable_bgr: [u8; 3],
+    /// Sensor noise, gray levels (σ).
+    #[serde(deserialize_with = "non_negative")]
+    pub noise_sigma: f64,
+    /// Optical blur, pixels (σ).
+    #[serde(deserialize_with = "non_negative")]
+    pub blur_sigma_px: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OpencvCameraConfig {
+    pub source: CameraSource,
+}
+
+/// Where a real camera's images come from.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum CameraSource {
+    /// A capture device, e.g. 0 for /dev/video0.
+    Device(i32),
+    /// A video file, read frame by frame.
+    Video(PathBuf),
+    /// A folder of images, read in name order, one per capture.
+    Folder(PathBuf),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DetectorConfig {
     pub backend: DetectorBackend,
 }
@@ -155,6 +270,47 @@ pub enum DetectorBackend {
     /// Reads the simulated cable's true pose and adds noise: a stand-in
     /// for the vision pipeline, named as such.
     Oracle(OracleConfig),
+    /// The vision pipeline on the camera's image (the paper's Section II).
+    Vision(VisionDetectorConfig),
+}
+
+/// The vision detector: the pipeline's settings, and what turns a grasp
+/// point in the image into a grasp frame in the base frame.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VisionDetectorConfig {
+    /// `auto` (classical on a plain background, else the network),
+    /// `classical` or `network`.
+    pub mask: MaskMethod,
+    /// `skeleton` or `superpixels` (the paper's).
+    pub instances: InstanceMethod,
+    /// The segmentation network, relative to the cell file.
+    pub model: PathBuf,
+    /// The ONNX Runtime library, relative to the cell file (default:
+    /// `$ORT_DYLIB_PATH`, else where the set-up puts it).
+    #[serde(default)]
+    pub onnxruntime: Option<PathBuf>,
+    /// Where the cable is expected in the image, `[x, y, width, height]`:
+    /// all work is bounded to it.
+    #[serde(default)]
+    pub roi_px: Option<[i32; 4]>,
+    /// The plane the cable lies in, known from the fixture (the paper's
+    /// "known distance" of the cable from the camera): a grasp point's ray
+    /// from the camera meets it at the grasp point in the base frame.
+    pub cable_plane: PlaneConfig,
+    /// The direction, in the base frame, the hand comes from: the grasp
+    /// frame's y points to this side.
+    #[serde(deserialize_with = "unit_vector3")]
+    pub approach_from: [f64; 3],
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneConfig {
+    #[serde(deserialize_with = "vector3")]
+    pub point_mm: [f64; 3],
+    #[serde(deserialize_with = "unit_vector3")]
+    pub normal: [f64; 3],
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -230,6 +386,86 @@ pub struct WorldConfig {
     pub spring_back_fraction: f64,
 }
 
+impl CellFile {
+    /// Makes the file's paths relative to `dir`, the cell file's folder.
+    pub fn resolve_paths(&mut self, dir: &Path) {
+        if let DetectorBackend::Vision(vision) = &mut self.detector.backend {
+            vision.model = dir.join(&vision.model);
+            if let Some(library) = &mut vision.onnxruntime {
+                *library = dir.join(&*library);
+            }
+        }
+        if let CameraBackend::Opencv(camera) = &mut self.camera.backend {
+            match &mut camera.source {
+                CameraSource::Video(path) | CameraSource::Folder(path) => *path = dir.join(&*path),
+                CameraSource::Device(_) => {}
+            }
+        }
+    }
+}
+
+impl MarkerConfig {
+    pub fn on_finger(&self) -> MarkerOnFinger {
+        MarkerOnFinger {
+            dictionary: match self.dictionary {
+                MarkerDictionary::Aruco4x4_50 => PREDEFINED_DICTIONARY_NAME::DICT_4X4_50,
+                MarkerDictionary::Aruco5x5_100 => PREDEFINED_DICTIONARY_NAME::DICT_5X5_100,
+                MarkerDictionary::Aruco6x6_250 => PREDEFINED_DICTIONARY_NAME::DICT_6X6_250,
+                MarkerDictionary::ArucoOriginal => PREDEFINED_DICTIONARY_NAME::DICT_ARUCO_ORIGINAL,
+            },
+            id: self.id,
+            side_mm: self.side_mm,
+            tcp_from_marker: self.tcp_from_marker.isometry(),
+        }
+    }
+}
+
+impl SimCameraConfig {
+    /// How the simulated scene looks: this file's background, cable colour,
+    /// noise and blur under the renderer's default light.
+    pub fn appearance(&self) -> Appearance {
+        Appearance {
+            background: self.background.clone(),
+            cable_bgr: self.cable_bgr,
+            noise_sigma: self.noise_sigma,
+            blur_sigma_px: self.blur_sigma_px,
+            ..Appearance::default()
+        }
+    }
+}
+
+impl VisionDetectorConfig {
+    /// The pipeline's settings.
+    pub fn vision(&self) -> VisionConfig {
+        VisionConfig {
+            mask: self.mask,
+            instances: self.instances,
+            roi_px: self
+                .roi_px
+                .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
+            ..VisionConfig::default()
+        }
+    }
+
+    /// How image points become base-frame points for a camera at
+    /// `calibration`.
+    pub fn image_to_base(
+        &self,
+        intrinsics: CameraModel,
+        calibration: &CalibrationConfig,
+    ) -> ImageToBase {
+        ImageToBase {
+            intrinsics,
+            base_from_camera: calibration.base_from_camera.isometry(),
+            cable_plane: PlaneInBase {
+                point_mm: Point3::from(self.cable_plane.point_mm),
+                normal: Unit::new_normalize(Vector3::from(self.cable_plane.normal)),
+            },
+            approach_from: Unit::new_normalize(Vector3::from(self.approach_from)),
+        }
+    }
+}
+
 /// A rigid transform as written in a cell file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -242,6 +478,14 @@ pub struct FrameConfig {
 }
 
 impl FrameConfig {
+    pub fn from_isometry(isometry: &Isometry3<f64>) -> Self {
+        let (roll, pitch, yaw) = isometry.rotation.euler_angles();
+        Self {
+            translation_mm: isometry.translation.vector.into(),
+            rotation_rpy_rad: [roll, pitch, yaw],
+        }
+    }
+
     pub fn isometry(&self) -> Isometry3<f64> {
         let [x, y, z] = self.translation_mm;
         let [roll, pitch, yaw] = self.rotation_rpy_rad;

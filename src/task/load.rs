@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
+use super::cell_file::DetectorBackend;
 use super::{CampaignFile, CellFile, TaskFile};
 
 /// Why a task or cell file could not be used.
@@ -56,8 +57,55 @@ pub fn load_task(path: &Path) -> Result<TaskFile, ConfigError> {
     parse(path, &read(path)?)
 }
 
+/// Loads a cell file: its schema, the checks that span several tables,
+/// and its paths made relative to the file's folder.
 pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
-    parse(path, &read(path)?)
+    let mut cell = parse_cell(path, &read(path)?)?;
+    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
+    Ok(cell)
+}
+
+/// Loads a cell file that may still lack its camera's calibration, for
+/// the command that makes it.
+pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
+    let mut cell: CellFile = parse(path, &read(path)?)?;
+    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
+    Ok(cell)
+}
+
+fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
+    let cell: CellFile = parse(path, text)?;
+    if matches!(cell.detector.backend, DetectorBackend::Vision(_))
+        && cell.camera.calibration.is_none()
+    {
+        let (line, column) = key_position(text, &["detector", "backend", "vision"]);
+        return Err(ConfigError::Invalid {
+            path: path.to_owned(),
+            line,
+            column,
+            field: "camera.calibration".to_owned(),
+            message: format!(
+                "the vision detector needs the camera's pose in the base frame: \
+                 run `cablecell calibrate-camera --cell {}`",
+                path.display()
+            ),
+        });
+    }
+    Ok(cell)
+}
+
+/// Line and column of the last key of `keys` (a path of tables), or of the
+/// file's start if it cannot be found.
+fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
+    let offset = toml_edit::Document::parse(text).ok().and_then(|document| {
+        let (last, tables) = keys.split_last()?;
+        let mut table: &dyn toml_edit::TableLike = document.as_table();
+        for key in tables {
+            table = table.get(key)?.as_table_like()?;
+        }
+        table.key(last)?.span().map(|span| span.start)
+    });
+    line_column(text, offset.unwrap_or(0))
 }
 
 /// Validates a task, cell or campaign file, telling which by its top table.
@@ -67,7 +115,7 @@ pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
     if table.contains_key("task") {
         parse::<TaskFile>(path, &text).map(|_| FileKind::Task)
     } else if table.contains_key("cell") {
-        parse::<CellFile>(path, &text).map(|_| FileKind::Cell)
+        parse_cell(path, &text).map(|_| FileKind::Cell)
     } else if table.contains_key("campaign") {
         parse::<CampaignFile>(path, &text).map(|_| FileKind::Campaign)
     } else {

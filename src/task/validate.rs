@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Deserializer, de::Error};
 
+use crate::perception::vision::calibration::CameraModel;
+
 /// A number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     let v = f64::deserialize(d)?;
@@ -80,6 +82,31 @@ pub fn vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
         Ok(v)
     } else {
         Err(D::Error::custom("expected three finite numbers"))
+    }
+}
+
+/// Three finite numbers, not all zero: a direction (normalised by its user).
+pub fn unit_vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    let v = vector3(d)?;
+    if v.iter().map(|x| x * x).sum::<f64>() > 1e-12 {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(
+            "expected a direction, found a zero vector",
+        ))
+    }
+}
+
+/// A camera's intrinsics: a positive image size and focal lengths, a
+/// finite principal point.
+pub fn camera_model<'de, D: Deserializer<'de>>(d: D) -> Result<CameraModel, D::Error> {
+    let model = CameraModel::deserialize(d)?;
+    if model.is_valid() {
+        Ok(model)
+    } else {
+        Err(D::Error::custom(
+            "expected a positive image size and focal lengths and a finite principal point",
+        ))
     }
 }
 

@@ -1,14 +1,18 @@
 //! Finding the cable: grasp frames in the base frame, one per cable seen.
-//! The vision pipeline (camera + network) implements this trait; until
-//! then the simulated cell uses an oracle.
+//! The vision detector looks through the cell's camera; the oracle, for
+//! campaigns that need controlled start offsets, reads the simulated
+//! world instead.
 
 mod oracle;
+mod vision;
 
 pub use oracle::OracleDetector;
+pub use vision::VisionDetector;
 
 use nalgebra::Isometry3;
 
 use super::DeviceError;
+use super::camera::Camera;
 
 /// A cable found in the scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,6 +25,7 @@ pub struct CableDetection {
 }
 
 pub trait CableDetector: Send {
-    /// Every cable in view, best first.
-    fn detect(&mut self) -> Result<Vec<CableDetection>, DeviceError>;
+    /// Every cable in view, best first, looking through `camera` if the
+    /// detector needs to.
+    fn detect(&mut self, camera: &mut dyn Camera) -> Result<Vec<CableDetection>, DeviceError>;
 }

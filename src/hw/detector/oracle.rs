@@ -9,6 +9,7 @@ use rand_distr::StandardNormal;
 
 use super::{CableDetection, CableDetector};
 use crate::hw::DeviceError;
+use crate::hw::camera::Camera;
 use crate::sim::world::{SharedWorld, lock};
 use crate::task::cell_file::OracleConfig;
 
@@ -25,7 +26,8 @@ impl OracleDetector {
 }
 
 impl CableDetector for OracleDetector {
-    fn detect(&mut self) -> Result<Vec<CableDetection>, DeviceError> {
+    /// The true grasp frame, disturbed; the camera is not needed.
+    fn detect(&mut self, _camera: &mut dyn Camera) -> Result<Vec<CableDetection>, DeviceError> {
         let config = &self.config;
         let across_mm = config.offset_across_mm
             + config.position_noise_mm * self.rng.sample::<f64, _>(StandardNormal);

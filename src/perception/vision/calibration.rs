@@ -70,7 +70,8 @@ impl CameraModel {
         ])
     }
 
-    fn is_valid(&self) -> bool {
+    /// A positive size and focal lengths, a finite principal point.
+    pub fn is_valid(&self) -> bool {
         self.width_px > 0
             && self.height_px > 0
             && [self.fx_px, self.fy_px]

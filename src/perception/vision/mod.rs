@@ -6,6 +6,7 @@
 pub mod calibration;
 pub mod error;
 pub mod eval;
+pub mod grasp_frame;
 pub mod mask;
 pub mod network;
 pub mod pipeline;

@@ -26,6 +26,8 @@ use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
 use ort::value::TensorRef;
 
+use super::{MaskNetwork, VisionError};
+
 /// Intra-op threads of a session: the cell's computer has two cores.
 const INTRA_THREADS: usize = 2;
 
@@ -253,6 +255,55 @@ impl SegmentationNet {
             reason: e.to_string(),
         })?;
         Ok(mask)
+    }
+}
+
+/// Where the ONNX Runtime library is when nothing says otherwise: where
+/// `scripts/setup` puts it.
+const DEFAULT_RUNTIME_LIBRARY: &str = ".setup/onnxruntime/libonnxruntime.so.1.31.1";
+
+/// The ONNX Runtime library to load: `given`, else `$ORT_DYLIB_PATH`, else
+/// where the set-up puts it.
+pub fn runtime_library(given: Option<&Path>) -> PathBuf {
+    given
+        .map(Path::to_path_buf)
+        .or_else(|| std::env::var_os("ORT_DYLIB_PATH").map(PathBuf::from))
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_RUNTIME_LIBRARY))
+}
+
+/// The network, loaded the first time a scene needs it: a plain
+/// background never pays for it.
+pub struct LazyNetwork {
+    model: PathBuf,
+    runtime_library: PathBuf,
+    loaded: Option<SegmentationNet>,
+}
+
+impl LazyNetwork {
+    pub fn new(model: PathBuf, runtime_library: PathBuf) -> Self {
+        Self {
+            model,
+            runtime_library,
+            loaded: None,
+        }
+    }
+}
+
+impl MaskNetwork for LazyNetwork {
+    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
+        let net = match &mut self.loaded {
+            Some(net) => net,
+            None => self.loaded.insert(
+                SegmentationNet::load(&self.model, &self.runtime_library).map_err(network_error)?,
+            ),
+        };
+        net.mask(bgr).map_err(network_error)
+    }
+}
+
+fn network_error(error: NetworkError) -> VisionError {
+    VisionError::Network {
+        reason: error.to_string(),
     }
 }
 

@@ -36,7 +36,8 @@ use crate::sim::world::SimWorld;
 /// What the cables lie on. Apart from `Plain`, each kind draws its
 /// colours, scales and layout from the render's random generator, so one
 /// kind gives many different backgrounds.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Background {
     /// One flat colour.
     Plain { bgr: [u8; 3] },

@@ -1,0 +1,246 @@
+//! The camera and the vision detector as cell devices: calibration from the
+//! finger's marker stored in the cell file, the detector's grasp frame
+//! against the simulated cable's truth, a real camera's image folder, and
+//! the errors a user meets.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use cablecell::cell::Cell;
+use cablecell::hw::DeviceError;
+use cablecell::hw::camera::{Camera, OpencvCamera};
+use cablecell::perception::vision::calibration::CameraModel;
+use cablecell::task::cell_file::{CameraBackend, CameraSource};
+use cablecell::task::load_cell;
+use nalgebra::Vector3;
+use opencv::core::{Mat, Scalar};
+use opencv::imgcodecs;
+use opencv::prelude::*;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cablecell runs")
+}
+
+/// The shipped simulated cell copied into `dir`, its model path made
+/// absolute, after `edit`.
+fn cell_copy(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    let models = root().join("models");
+    let text = edit(text.replace("../models", models.to_str().expect("utf-8")));
+    let path = dir.join("cell.toml");
+    std::fs::write(&path, text).expect("write");
+    path
+}
+
+/// The text with the `[camera.calibration]` table (its comment, header and
+/// two keys) taken out.
+fn without_calibration(text: String) -> String {
+    let start = text
+        .find("\n# Written by `cablecell calibrate-camera`")
+        .expect("calibration comment");
+    let end = text[start..]
+        .find("reprojection_error_px")
+        .expect("calibration")
+        + start;
+    let end = end + text[end..].find('\n').expect("line end");
+    format!("{}{}", &text[..start], &text[end..])
+}
+
+#[test]
+fn the_detected_grasp_frame_is_the_cable_s_midpoint_frame() {
+    let file = load_cell(&root().join("config/cell.sim.toml")).expect("cell");
+    let center = Vector3::from(file.world.cable_center_mm);
+    let tilt_rad = file.world.cable_tilt_rad;
+    let along = Vector3::new(tilt_rad.cos(), 0.0, tilt_rad.sin());
+    let up = Vector3::new(-tilt_rad.sin(), 0.0, tilt_rad.cos());
+    for seed in 0..5 {
+        let mut cell = Cell::build(&file, seed);
+        let found = cell.detector.detect(cell.camera.as_mut()).expect("detect");
+        // Clutter may show up too, after the cable.
+        assert!(!found.is_empty(), "seed {seed}: the cable is in view");
+        let frame = found[0].base_from_cable;
+        // Across the cable, in its plane, is what puts the cable off the
+        // pad's axis; along it, s = 0.5 of what the camera sees of the
+        // cable may slide a little, and matters little.
+        let offset = frame.translation.vector - center;
+        let (across_mm, along_mm) = (offset.dot(&up), offset.dot(&along));
+        let x = frame.rotation * Vector3::x();
+        let angle_error_rad = x.dot(&along).abs().min(1.0).acos();
+        eprintln!(
+            "seed {seed}: across {across_mm:.3} mm, along {along_mm:.3} mm, {angle_error_rad:.4} rad"
+        );
+        assert!(across_mm.abs() < 0.5, "seed {seed}: {across_mm} mm across");
+        assert!(along_mm.abs() < 3.0, "seed {seed}: {along_mm} mm along");
+        assert!(angle_error_rad < 0.03, "seed {seed}: {angle_error_rad} rad");
+        // z towards the camera (base −y), y towards the hand above.
+        assert!((frame.rotation * Vector3::z()).y < -0.99);
+        assert!((frame.rotation * Vector3::y()).z > 0.99);
+    }
+}
+
+#[test]
+fn calibrate_camera_stores_a_pose_near_the_true_one_and_keeps_the_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = cell_copy(dir.path(), without_calibration);
+    let before = std::fs::read_to_string(&path).expect("read");
+    assert!(!before.contains("[camera.calibration]"));
+
+    // Without the calibration the vision detector cannot place what it
+    // sees: the file is refused at the detector, naming the missing table.
+    let out = cablecell(&["check", path.to_str().expect("utf-8")]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let line = before
+        .lines()
+        .position(|l| l.starts_with("[detector.backend.vision]"))
+        .expect("vision table")
+        + 1;
+    assert!(
+        err.contains(&format!("cell.toml:{line}:")) && err.contains("camera.calibration"),
+        "{err}"
+    );
+    assert!(err.contains("cablecell calibrate-camera"), "{err}");
+
+    let out = cablecell(&[
+        "calibrate-camera",
+        "--cell",
+        path.to_str().expect("utf-8"),
+        "--dry-run",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&path).expect("read"), before);
+
+    let out = cablecell(&["calibrate-camera", "--cell", path.to_str().expect("utf-8")]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("from 4 view(s)"), "{text}");
+    let after = std::fs::read_to_string(&path).expect("read");
+    // Every line that was there is still there, comments included.
+    let kept: Vec<&str> = after.lines().collect();
+    assert!(before.lines().all(|line| kept.contains(&line)));
+
+    let file = load_cell(&path).expect("a calibrated cell loads");
+    let estimate = file
+        .camera
+        .calibration
+        .expect("stored")
+        .base_from_camera
+        .isometry();
+    let CameraBackend::Sim(sim) = &file.camera.backend else {
+        panic!("the shipped cell's camera is simulated")
+    };
+    let truth = sim.base_from_camera.isometry();
+    let distance_mm = (estimate.translation.vector - truth.translation.vector).norm();
+    let angle_deg = (truth.rotation.inverse() * estimate.rotation)
+        .angle()
+        .to_degrees();
+    assert!(
+        distance_mm < 0.5 && angle_deg < 0.05,
+        "{distance_mm} mm, {angle_deg}°"
+    );
+}
+
+#[test]
+fn calibration_without_the_marker_in_view_fails_clearly() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // The first pose turns the hand half a turn: the marker faces away.
+    let path = cell_copy(dir.path(), |text| {
+        text.replace(
+            "[450.0, 0.0, 330.0], rotation_rpy_rad = [3.141592653589793, 0.0, 0.0]",
+            "[450.0, 0.0, 330.0], rotation_rpy_rad = [3.141592653589793, 0.0, 3.141592653589793]",
+        )
+    });
+    let out = cablecell(&[
+        "calibrate-camera",
+        "--cell",
+        path.to_str().expect("utf-8"),
+        "--dry-run",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("calibration failed") && err.contains("marker 3 not found in image 0"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_missing_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = cell_copy(dir.path(), |text| {
+        text.replace("cable_segmentation.onnx", "no-such-model.onnx")
+    });
+    let out = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--cell",
+        path.to_str().expect("utf-8"),
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["outcome"]["kind"], "fault");
+    assert_eq!(report["outcome"]["state"], "detect");
+    let reason = report["outcome"].to_string();
+    assert!(reason.contains("no-such-model.onnx"), "{reason}");
+}
+
+fn gray_image(width: i32, height: i32) -> Mat {
+    Mat::new_rows_cols_with_default(height, width, opencv::core::CV_8UC3, Scalar::all(128.0))
+        .expect("image")
+}
+
+#[test]
+fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, width) in [("b.png", 64), ("a.png", 64), ("c.png", 32)] {
+        let written = imgcodecs::imwrite(
+            dir.path().join(name),
+            &gray_image(width, 48),
+            &opencv::core::Vector::new(),
+        )
+        .expect("imwrite");
+        assert!(written);
+    }
+    std::fs::write(dir.path().join("notes.txt"), "not an image").expect("write");
+    let intrinsics = CameraModel::centred(64, 48, 1.0);
+    let mut camera = OpencvCamera::new(CameraSource::Folder(dir.path().to_path_buf()), intrinsics);
+    for _ in 0..2 {
+        let image = camera.capture().expect("a.png, then b.png");
+        assert_eq!((image.cols(), image.rows()), (64, 48));
+    }
+    // c.png is not the size the intrinsics describe.
+    match camera.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => assert!(reason.contains("32×48"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    match camera.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => {
+            assert!(reason.contains("all 3 images"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut missing =
+        OpencvCamera::new(CameraSource::Folder(dir.path().join("nowhere")), intrinsics);
+    match missing.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => {
+            assert!(reason.contains("nowhere"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
