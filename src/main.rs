@@ -71,6 +71,10 @@ enum Command {
         images: Vec<PathBuf>,
         #[command(flatten)]
         vision: cli::vision_io::VisionArgs,
+        /// A cell file whose calibrated camera took the images: each grasp
+        /// frame is also given in the robot's base frame.
+        #[arg(long)]
+        cell: Option<PathBuf>,
         /// Print one JSON array of reports.
         #[arg(long)]
         json: bool,
@@ -203,10 +207,18 @@ fn main() -> ExitCode {
         Command::Detect {
             images,
             vision,
+            cell,
             json,
             masks,
             overlay,
-        } => cli::detect::detect(&images, &vision, json, masks.as_deref(), overlay.as_deref()),
+        } => cli::detect::detect(
+            &images,
+            &vision,
+            cell.as_deref(),
+            json,
+            masks.as_deref(),
+            overlay.as_deref(),
+        ),
         Command::CalibrateCamera {
             cell,
             seed,

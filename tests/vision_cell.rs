@@ -244,3 +244,64 @@ fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
+    let file = load_cell(&root().join("config/cell.sim.toml")).expect("cell");
+    let mut cell = Cell::build(&file, 1);
+    let image = cell.camera.capture().expect("capture");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("scene.png");
+    assert!(imgcodecs::imwrite(&path, &image, &opencv::core::Vector::new()).expect("imwrite"));
+    let out = cablecell(&[
+        "detect",
+        path.to_str().expect("utf-8"),
+        "--cell",
+        "config/cell.sim.toml",
+        "--mask",
+        "network",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let frames = reports[0]["grasp_frames_in_base"]
+        .as_array()
+        .expect("frames");
+    let center = file.world.cable_center_mm;
+    // The cable is the longest thing in view, wherever clutter lies.
+    let cables = reports[0]["cables"].as_array().expect("cables");
+    let longest = (0..cables.len())
+        .max_by(|&a, &b| {
+            let length = |k: usize| cables[k]["length_px"].as_f64().expect("length");
+            length(a).total_cmp(&length(b))
+        })
+        .expect("a cable");
+    let t: Vec<f64> = frames[longest]["translation_mm"]
+        .as_array()
+        .expect("translation")
+        .iter()
+        .map(|v| v.as_f64().expect("number"))
+        .collect();
+    // Within a few millimetres along the cable (base x), a fraction of one
+    // across it (base z), on the plane (base y = 0).
+    assert!((t[0] - center[0]).abs() < 5.0, "{t:?}");
+    assert!(t[1].abs() < 1e-6, "{t:?}");
+    assert!((t[2] - center[2]).abs() < 1.0, "{t:?}");
+
+    // A cell whose camera is not calibrated cannot place them.
+    let path = cell_copy(dir.path(), without_calibration);
+    let out = cablecell(&[
+        "detect",
+        "--cell",
+        path.to_str().expect("utf-8"),
+        dir.path().join("scene.png").to_str().expect("utf-8"),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the camera is not calibrated"), "{err}");
+}

@@ -2,7 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
+use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
+use cablecell::task::cell_file::{CellFile, DetectorBackend, FrameConfig};
+use cablecell::task::load::load_cell_uncalibrated;
 use opencv::core::{Mat, Point, Scalar, Vector};
 use opencv::imgcodecs;
 use opencv::imgproc;
@@ -18,18 +21,56 @@ struct ImageReport<'a> {
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
     cables: &'a [CableInstance],
+    /// Per cable, its grasp frame in the base frame, when the cell's camera
+    /// is calibrated.
+    grasp_frames_in_base: Vec<Option<GraspInBase>>,
     timings_ms: Vec<(&'static str, f64)>,
     total_ms: f64,
     notes: &'a [String],
 }
 
+/// A grasp frame in the base frame, as cell files write poses.
+#[derive(Serialize)]
+struct GraspInBase {
+    translation_mm: [f64; 3],
+    rotation_rpy_rad: [f64; 3],
+}
+
+/// How the cell at `cell_path` places image points in the base frame: its
+/// calibrated camera and the vision detector's cable plane.
+fn image_to_base(cell_path: &Path) -> Result<ImageToBase, String> {
+    let file: CellFile = load_cell_uncalibrated(cell_path).map_err(|e| e.to_string())?;
+    let name = cell_path.display();
+    let calibration = file.camera.calibration.as_ref().ok_or_else(|| {
+        format!(
+            "{name}: the camera is not calibrated: run `cablecell calibrate-camera --cell {name}`"
+        )
+    })?;
+    match &file.detector.backend {
+        DetectorBackend::Vision(vision) => {
+            Ok(vision.image_to_base(file.camera.intrinsics, calibration))
+        }
+        DetectorBackend::Oracle(_) => Err(format!(
+            "{name}: detector.backend: the cell has no vision detector, so no cable plane to place grasp points on"
+        )),
+    }
+}
+
 pub fn detect(
     images: &[PathBuf],
     args: &VisionArgs,
+    cell: Option<&Path>,
     json: bool,
     masks: Option<&Path>,
     overlay: Option<&Path>,
 ) -> Status {
+    let to_base = match cell.map(image_to_base).transpose() {
+        Ok(to_base) => to_base,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
     let mut pipeline = args.pipeline();
     let mut network = args.network();
     let mut reports = Vec::new();
@@ -63,6 +104,19 @@ pub fn detect(
             mask_used: output.mask_used,
             plain_background: output.plain_background,
             cables: &output.cables,
+            grasp_frames_in_base: output
+                .cables
+                .iter()
+                .map(|cable| {
+                    let frame = FrameConfig::from_isometry(
+                        &to_base.as_ref()?.base_from_cable(&cable.spline)?,
+                    );
+                    Some(GraspInBase {
+                        translation_mm: frame.translation_mm,
+                        rotation_rpy_rad: frame.rotation_rpy_rad,
+                    })
+                })
+                .collect(),
             timings_ms: output.timings_ms.clone(),
             total_ms: output.timings_ms.iter().map(|(_, ms)| ms).sum(),
             notes: &output.notes,
@@ -112,6 +166,13 @@ fn print_report(report: &ImageReport) {
             cable.direction_rad,
             cable.spline.control_points_px.len()
         );
+        if let Some(Some(frame)) = report.grasp_frames_in_base.get(k) {
+            let [x, y, z] = frame.translation_mm;
+            let [roll, pitch, yaw] = frame.rotation_rpy_rad;
+            println!(
+                "           in base at [{x:.1}, {y:.1}, {z:.1}] mm, rpy [{roll:+.4}, {pitch:+.4}, {yaw:+.4}] rad"
+            );
+        }
     }
     for note in report.notes {
         println!("  note: {note}");
