@@ -61,6 +61,35 @@ pub enum DeviceError {
         port: String,
         detail: String,
     },
+    /// A pose outside the cell's workspace box was asked for, and refused
+    /// before the device moved: check the task's poses, the detection or
+    /// the tactile correction that produced it, or widen the box in the
+    /// cell file if the cell really allows it.
+    #[error(
+        "{device}: refused {command} to ({:.1}, {:.1}, {:.1}) mm: outside the workspace box \
+         ({:.1}, {:.1}, {:.1})..({:.1}, {:.1}, {:.1}) mm",
+        target_mm[0], target_mm[1], target_mm[2],
+        min_mm[0], min_mm[1], min_mm[2],
+        max_mm[0], max_mm[1], max_mm[2]
+    )]
+    OutsideWorkspace {
+        device: DeviceKind,
+        command: &'static str,
+        target_mm: [f64; 3],
+        min_mm: [f64; 3],
+        max_mm: [f64; 3],
+    },
+    /// A speed above the cell's limit (or not a positive number) was asked
+    /// for, and refused before the device moved: lower the task's speed.
+    #[error(
+        "{device}: refused {command} at {speed_mm_s} mm/s: the cell allows (0, {limit_mm_s}] mm/s"
+    )]
+    TooFast {
+        device: DeviceKind,
+        command: &'static str,
+        speed_mm_s: f64,
+        limit_mm_s: f64,
+    },
 }
 
 /// Whether a read error only means that nothing arrived before the port's
@@ -79,7 +108,9 @@ impl DeviceError {
             DeviceError::Timeout { device, .. }
             | DeviceError::Refused { device, .. }
             | DeviceError::Disconnected { device, .. }
-            | DeviceError::Garbled { device, .. } => *device,
+            | DeviceError::Garbled { device, .. }
+            | DeviceError::OutsideWorkspace { device, .. }
+            | DeviceError::TooFast { device, .. } => *device,
         }
     }
 }
