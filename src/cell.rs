@@ -172,7 +172,8 @@ impl Cell {
                     mcu.serve(master, stop)
                 })?;
                 let port = with_timeout(port, &path, DeviceKind::Tactile)?;
-                let mut driver = RemodelTactile::new(port, &path, emulated.layout, clock());
+                let mut driver = RemodelTactile::new(port, &path, emulated.layout, clock())
+                    .with_deadline(Duration::from_millis(emulated.deadline_ms));
                 check_taxel_count(&mut driver, &path)?;
                 Box::new(PolledTactile::start(driver, file.tactile.rate_hz))
             }

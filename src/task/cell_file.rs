@@ -286,6 +286,10 @@ pub struct EmulatedRemodelConfig {
     /// The channel order the emulator sends and the driver undoes.
     #[serde(default = "identity_layout", deserialize_with = "taxel_layout")]
     pub layout: [usize; TAXEL_COUNT],
+    /// How long a sample may take to arrive whole: the emulator shares the
+    /// host's cores, so a loaded host may want more than a real link.
+    #[serde(default = "remodel_deadline_ms")]
+    pub deadline_ms: u64,
     /// The simulated pad the emulator samples.
     pub pad: SimTactileConfig,
     /// Fault injection: how the emulator misbehaves, and from which
