@@ -128,7 +128,10 @@ fn a_gripper_that_misbehaves_mid_task_is_a_clear_fault_with_the_arm_stopped() {
             "garbled answer: no whole answer to grip",
         ),
         (pg70::Misbehaviour::Truncated, "unfinished frame"),
-        (pg70::Misbehaviour::Silent, "no answer within 500 ms"),
+        (
+            pg70::Misbehaviour::Silent,
+            "no answer to grip within 500 ms",
+        ),
         (pg70::Misbehaviour::BadCrc, "wrong CRC"),
         (
             pg70::Misbehaviour::ErrorFrame(0xD9),
@@ -206,7 +209,7 @@ fn a_tactile_sensor_that_fails_during_the_grasp_faults_and_the_jaws_let_go() {
     for (misbehaviour, expected) in [
         (
             tactile::Misbehaviour::Silent,
-            "tactile sensor: no answer within 100 ms",
+            "no answer to sample within 100 ms",
         ),
         (
             tactile::Misbehaviour::Truncated,

@@ -111,7 +111,9 @@ fn garbage_on_the_line_is_skipped() {
 fn silence_times_out() {
     let mut bench = Bench::new(Some(Misbehaviour::Silent), None);
     match bench.driver.reference() {
-        Err(DeviceError::Timeout { waited_ms, .. }) => assert_eq!(waited_ms, 500),
+        Err(DeviceError::NoAnswer {
+            command, waited_ms, ..
+        }) => assert_eq!((command, waited_ms), ("reference", 500)),
         other => panic!("{other:?}"),
     }
 }

@@ -38,6 +38,15 @@ pub enum DeviceError {
     /// The device did not answer in time: check its cable, power and port.
     #[error("{device}: no answer within {waited_ms} ms")]
     Timeout { device: DeviceKind, waited_ms: u64 },
+    /// The device on a serial port did not answer in time: check its
+    /// cable, power and baud rate, and that the port is this device's.
+    #[error("{device} on {port}: no answer to {command} within {waited_ms} ms")]
+    NoAnswer {
+        device: DeviceKind,
+        port: String,
+        command: &'static str,
+        waited_ms: u64,
+    },
     /// The device refused the command; `reason` is its own explanation.
     #[error("{device}: refused {command}: {reason}")]
     Refused {
@@ -106,6 +115,7 @@ impl DeviceError {
     pub fn device(&self) -> DeviceKind {
         match self {
             DeviceError::Timeout { device, .. }
+            | DeviceError::NoAnswer { device, .. }
             | DeviceError::Refused { device, .. }
             | DeviceError::Disconnected { device, .. }
             | DeviceError::Garbled { device, .. }

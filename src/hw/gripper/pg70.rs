@@ -130,8 +130,10 @@ impl<T: Read + Write + Send> Pg70<T> {
                 let crc_errors = self.decoder.crc_errors - crc_errors;
                 let pending = self.decoder.pending_bytes();
                 if discarded + crc_errors + pending == 0 {
-                    return Err(DeviceError::Timeout {
+                    return Err(DeviceError::NoAnswer {
                         device: DeviceKind::Gripper,
+                        port: self.port_name.clone(),
+                        command: name,
                         waited_ms: timeout.as_millis() as u64,
                     });
                 }

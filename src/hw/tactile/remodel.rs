@@ -117,8 +117,10 @@ impl<L: SerialLink> RemodelTactile<L> {
         let mut filled = 0;
         while filled < answer.len() {
             if Instant::now() >= deadline && filled == 0 {
-                return Err(DeviceError::Timeout {
+                return Err(DeviceError::NoAnswer {
                     device: DeviceKind::Tactile,
+                    port: self.port_name.clone(),
+                    command: name,
                     waited_ms: self.deadline.as_millis() as u64,
                 });
             }
