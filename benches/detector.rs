@@ -13,7 +13,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 fn detector(c: &mut Criterion) {
     let file = load_cell(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/cell.sim.toml"))
         .expect("the shipped simulated cell");
-    let mut cell = Cell::build(&file, 1);
+    let mut cell = Cell::build(&file, 1).expect("the simulated cell builds");
     // The first detection loads the network.
     cell.detector
         .detect(cell.camera.as_mut())

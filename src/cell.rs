@@ -1,21 +1,41 @@
 //! A cell: the devices a cell file names, ready to use.
+//!
+//! Each device is simulated (`sim`: no driver, the simulated world), real
+//! (`pg70`, `remodel`: the real driver on a real serial port) or emulated
+//! (`emulated_pg70`, `emulated_remodel`: the real driver on a
+//! pseudo-terminal to an emulator of the device that this cell runs on a
+//! thread of its own, acting on the simulated world). Every arm is wrapped
+//! in the cell's workspace and speed limits.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use serialport::{SerialPort, TTYPort};
 
 use crate::geometry::LineInSensor;
-use crate::hw::arm::{Arm, SimArm};
+use crate::hw::arm::{Arm, SimArm, WorkspaceLimited};
 use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
 use crate::hw::clock::{Clock, SimClock};
 use crate::hw::detector::{CableDetector, OracleDetector, VisionDetector};
-use crate::hw::gripper::{Gripper, SimGripper};
-use crate::hw::tactile::{SimTactile, TactileSensor};
+use crate::hw::gripper::{Gripper, Pg70, SimGripper};
+use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSensor};
+use crate::hw::{DeviceError, DeviceKind};
+use crate::perception::tactile::TAXEL_COUNT;
 use crate::perception::vision::Pipeline;
 use crate::perception::vision::network::{LazyNetwork, runtime_library};
+use crate::sim::emulator::FaultSwitch;
+use crate::sim::emulator::pg70::{self, Pg70Emulator};
+use crate::sim::emulator::tactile::{self, TactileEmulator};
 use crate::sim::motion::CartesianLimits;
 use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};
 use crate::task::CellFile;
 use crate::task::cell_file::{
-    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, TactileBackend,
+    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, SimGripperConfig, SimTactileConfig,
+    TactileBackend,
 };
 
 pub struct Cell {
@@ -26,14 +46,68 @@ pub struct Cell {
     pub camera: Box<dyn Camera>,
     pub detector: Box<dyn CableDetector>,
     pub clock: Box<dyn Clock>,
+    /// The emulators the cell runs; dropped after the drivers that talk
+    /// to them.
+    pub emulators: Emulators,
     /// The simulated world, when there is one: it knows the truth.
     world: SharedWorld,
 }
 
+/// The device emulators of an emulated cell, each serving a
+/// pseudo-terminal on its own thread until the cell is dropped.
+#[derive(Default)]
+pub struct Emulators {
+    /// Switches the emulated PG70's misbehaviour, if the gripper is one.
+    pub gripper_fault: Option<FaultSwitch<pg70::Misbehaviour>>,
+    /// Switches the emulated tactile microcontroller's misbehaviour.
+    pub tactile_fault: Option<FaultSwitch<tactile::Misbehaviour>>,
+    stop: Arc<AtomicBool>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl Drop for Emulators {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        for thread in self.threads.drain(..) {
+            // A panicking emulator has already reported itself.
+            let _ = thread.join();
+        }
+    }
+}
+
+impl Emulators {
+    /// A new pseudo-terminal whose master end `serve` takes on a thread of
+    /// its own; returns the slave end and its path, for the driver.
+    fn start(
+        &mut self,
+        device: DeviceKind,
+        serve: impl FnOnce(TTYPort, &AtomicBool) + Send + 'static,
+    ) -> Result<(TTYPort, String), DeviceError> {
+        let unavailable = |reason: String| DeviceError::Disconnected {
+            device,
+            port: "a new pseudo-terminal".into(),
+            reason,
+        };
+        let (mut master, slave) =
+            TTYPort::pair().map_err(|e| unavailable(format!("cannot make one: {e}")))?;
+        master
+            .set_timeout(Duration::from_millis(10))
+            .map_err(|e| unavailable(e.to_string()))?;
+        let path = slave.name().unwrap_or_else(|| "pseudo-terminal".into());
+        let stop = Arc::clone(&self.stop);
+        self.threads
+            .push(std::thread::spawn(move || serve(master, &stop)));
+        Ok((slave, path))
+    }
+}
+
 impl Cell {
-    /// Builds the cell of `file`; `seed` seeds every simulated source.
-    pub fn build(file: &CellFile, seed: u64) -> Self {
+    /// Builds the cell of `file`, `seed` seeding every simulated source;
+    /// opens the real devices' ports and starts the emulators.
+    pub fn build(file: &CellFile, seed: u64) -> Result<Self, DeviceError> {
         let world = SimWorld::new(&file.world, file.tactile.tcp_from_sensor.isometry()).shared();
+        let clock = || -> Box<dyn Clock> { Box::new(SimClock::new(world.clone())) };
+        let mut emulators = Emulators::default();
         let arm: Box<dyn Arm> = match &file.arm.backend {
             ArmBackend::Sim(sim) => Box::new(SimArm::new(
                 world.clone(),
@@ -49,28 +123,64 @@ impl Cell {
                 rng(seed, Stream::Arm),
             )),
         };
+        let arm = Box::new(WorkspaceLimited::new(
+            arm,
+            file.arm.workspace,
+            file.arm.max_speed_mm_s,
+        ));
         let gripper: Box<dyn Gripper> = match &file.gripper.backend {
-            GripperBackend::Sim(sim) => Box::new(SimGripper::new(
-                world.clone(),
-                sim.stroke_mm,
-                sim.speed_mm_s,
-                sim.squeeze_fraction_per_a,
-            )),
+            GripperBackend::Sim(sim) => Box::new(sim_jaws(&world, sim)),
+            GripperBackend::Pg70(pg70) => {
+                let port = open(DeviceKind::Gripper, &pg70.port, pg70.baud, 10)?;
+                let mut driver = Pg70::new(port, &pg70.port, pg70.module_id).with_timeouts(
+                    Duration::from_millis(pg70.reply_timeout_ms),
+                    Duration::from_millis(pg70.move_timeout_ms),
+                );
+                if let Some(motion) = pg70.motion {
+                    driver =
+                        driver.with_motion(motion.speed_mm_s as f32, motion.accel_mm_s2 as f32);
+                }
+                Box::new(driver)
+            }
+            GripperBackend::EmulatedPg70(emulated) => {
+                let mut module =
+                    Pg70Emulator::new(emulated.module_id, sim_jaws(&world, &emulated.jaws));
+                module.fault.set(emulated.fault);
+                emulators.gripper_fault = Some(module.fault.clone());
+                let (port, path) = emulators.start(DeviceKind::Gripper, move |master, stop| {
+                    module.serve(master, stop)
+                })?;
+                Box::new(Pg70::new(
+                    with_timeout(port, &path, DeviceKind::Gripper)?,
+                    &path,
+                    emulated.module_id,
+                ))
+            }
         };
         let tactile: Box<dyn TactileSensor> = match &file.tactile.backend {
-            TactileBackend::Sim(sim) => {
-                let model = TactileModel::new(
-                    sim,
-                    file.tactile.pitch_mm,
-                    &mut rng(seed, Stream::TactileCalibration),
-                );
-                Box::new(SimTactile::new(
-                    world.clone(),
-                    model,
-                    file.tactile.rate_hz,
-                    sim.silent_after_frames,
-                    rng(seed, Stream::Tactile),
-                ))
+            TactileBackend::Sim(sim) => Box::new(sim_pad(&world, file, sim, seed)),
+            TactileBackend::Remodel(remodel) => {
+                let port = open(DeviceKind::Tactile, &remodel.port, remodel.baud, 2)?;
+                let mut driver = RemodelTactile::new(port, &remodel.port, remodel.layout, clock())
+                    .with_deadline(Duration::from_millis(remodel.deadline_ms));
+                check_taxel_count(&mut driver, &remodel.port)?;
+                Box::new(PolledTactile::start(driver, file.tactile.rate_hz))
+            }
+            TactileBackend::EmulatedRemodel(emulated) => {
+                let mut pad = sim_pad(&world, file, &emulated.pad, seed);
+                let mut mcu = TactileEmulator::new(emulated.layout, move || {
+                    pad.read().ok().map(|frame| frame.raw)
+                });
+                mcu.fault.set(emulated.fault);
+                emulators.tactile_fault = Some(mcu.fault.clone());
+                let (port, path) = emulators.start(DeviceKind::Tactile, move |master, stop| {
+                    mcu.serve(master, stop)
+                })?;
+                let port = with_timeout(port, &path, DeviceKind::Tactile)?;
+                let mut driver = RemodelTactile::new(port, &path, emulated.layout, clock())
+                    .with_deadline(Duration::from_millis(emulated.deadline_ms));
+                check_taxel_count(&mut driver, &path)?;
+                Box::new(PolledTactile::start(driver, file.tactile.rate_hz))
             }
         };
         let camera_config = &file.camera;
@@ -106,20 +216,99 @@ impl Cell {
                     .map(|calibration| vision.image_to_base(camera_config.intrinsics, calibration)),
             )),
         };
-        Self {
+        Ok(Self {
             name: file.cell.name.clone(),
             arm,
             gripper,
             tactile,
             camera,
             detector,
-            clock: Box::new(SimClock::new(world.clone())),
+            clock: clock(),
+            emulators,
             world,
-        }
+        })
     }
 
     /// Where the cable really lies on the pad, if the cell can know it.
     pub fn cable_on_pad_truth(&self) -> Option<LineInSensor> {
         lock(&self.world).held()
+    }
+
+    /// The simulated world that the simulated and emulated devices share:
+    /// where the jaws and the arm really are.
+    pub fn world(&self) -> SharedWorld {
+        self.world.clone()
+    }
+}
+
+fn sim_jaws(world: &SharedWorld, config: &SimGripperConfig) -> SimGripper {
+    SimGripper::new(
+        world.clone(),
+        config.stroke_mm,
+        config.speed_mm_s,
+        config.squeeze_fraction_per_a,
+    )
+}
+
+fn sim_pad(
+    world: &SharedWorld,
+    file: &CellFile,
+    config: &SimTactileConfig,
+    seed: u64,
+) -> SimTactile {
+    let model = TactileModel::new(
+        config,
+        file.tactile.pitch_mm,
+        &mut rng(seed, Stream::TactileCalibration),
+    );
+    SimTactile::new(
+        world.clone(),
+        model,
+        file.tactile.rate_hz,
+        config.silent_after_frames,
+        rng(seed, Stream::Tactile),
+    )
+}
+
+/// Opens a real serial port whose reads return within `read_timeout_ms`,
+/// so that the drivers keep their own deadlines.
+fn open(
+    device: DeviceKind,
+    port: &str,
+    baud: u32,
+    read_timeout_ms: u64,
+) -> Result<TTYPort, DeviceError> {
+    serialport::new(port, baud)
+        .timeout(Duration::from_millis(read_timeout_ms))
+        .open_native()
+        .map_err(|e| DeviceError::Disconnected {
+            device,
+            port: port.to_owned(),
+            reason: format!("cannot open the port: {e}"),
+        })
+}
+
+fn with_timeout(mut port: TTYPort, path: &str, device: DeviceKind) -> Result<TTYPort, DeviceError> {
+    port.set_timeout(Duration::from_millis(2))
+        .map_err(|e| DeviceError::Disconnected {
+            device,
+            port: path.to_owned(),
+            reason: e.to_string(),
+        })?;
+    Ok(port)
+}
+
+/// A sensor that is not a 5×5 pad (a wrong port, a proximity sensor) is
+/// caught before the task starts.
+fn check_taxel_count(driver: &mut RemodelTactile<TTYPort>, port: &str) -> Result<(), DeviceError> {
+    let count = driver.count()?;
+    if usize::from(count) == TAXEL_COUNT {
+        Ok(())
+    } else {
+        Err(DeviceError::Garbled {
+            device: DeviceKind::Tactile,
+            port: port.to_owned(),
+            detail: format!("the sensor has {count} sensing elements, the pad {TAXEL_COUNT}"),
+        })
     }
 }

@@ -8,7 +8,8 @@ use std::time::Duration;
 
 use cablecell::hw::DeviceError;
 use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
-use cablecell::sim::emulator::pg70::{Misbehaviour, Pg70Emulator};
+use cablecell::sim::emulator::Fault;
+use cablecell::sim::emulator::pg70::{FreeJaws, Misbehaviour, Pg70Emulator};
 use serialport::{SerialPort, TTYPort};
 
 struct Bench {
@@ -18,7 +19,7 @@ struct Bench {
 }
 
 impl Bench {
-    fn new(misbehaviour: Misbehaviour, object_mm: Option<f32>) -> Self {
+    fn new(misbehaviour: Option<Misbehaviour>, object_mm: Option<f64>) -> Self {
         let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
         master
             .set_timeout(Duration::from_millis(5))
@@ -29,9 +30,8 @@ impl Bench {
         let stop = Arc::new(AtomicBool::new(false));
         let serving = Arc::clone(&stop);
         let emulator = std::thread::spawn(move || {
-            let mut module = Pg70Emulator::new(12);
-            module.object_mm = object_mm;
-            module.misbehaviour = misbehaviour;
+            let mut module = Pg70Emulator::new(12, FreeJaws::new(object_mm));
+            module.fault.set(misbehaviour.map(Fault::now));
             module.serve(master, &serving);
         });
         let name = slave.name().unwrap_or_else(|| "pty".into());
@@ -59,7 +59,7 @@ impl Drop for Bench {
 
 #[test]
 fn a_grasp_refuses_moves_before_referencing_then_holds_the_cable() {
-    let mut bench = Bench::new(Misbehaviour::None, Some(2.5));
+    let mut bench = Bench::new(None, Some(2.5));
     match bench.driver.move_to(20.0) {
         Err(DeviceError::Refused { reason, .. }) => {
             assert!(reason.contains("0x06: not referenced"), "{reason}")
@@ -78,7 +78,7 @@ fn a_grasp_refuses_moves_before_referencing_then_holds_the_cable() {
 
 #[test]
 fn closing_on_nothing_is_an_empty_grip() {
-    let mut bench = Bench::new(Misbehaviour::None, None);
+    let mut bench = Bench::new(None, None);
     bench.driver.reference().expect("reference");
     bench.driver.move_to(20.0).expect("open");
     assert_eq!(bench.driver.grip(1.0).expect("grip"), GripOutcome::Empty);
@@ -86,7 +86,7 @@ fn closing_on_nothing_is_an_empty_grip() {
 
 #[test]
 fn a_move_beyond_the_stroke_is_refused_with_its_meaning() {
-    let mut bench = Bench::new(Misbehaviour::None, None);
+    let mut bench = Bench::new(None, None);
     bench.driver.reference().expect("reference");
     match bench.driver.move_to(90.0) {
         Err(DeviceError::Refused { reason, .. }) => {
@@ -98,7 +98,7 @@ fn a_move_beyond_the_stroke_is_refused_with_its_meaning() {
 
 #[test]
 fn garbage_on_the_line_is_skipped() {
-    let mut bench = Bench::new(Misbehaviour::GarbageFirst, Some(3.0));
+    let mut bench = Bench::new(Some(Misbehaviour::GarbageFirst), Some(3.0));
     bench.driver.reference().expect("reference through garbage");
     bench.driver.move_to(20.0).expect("open through garbage");
     assert!(matches!(
@@ -108,19 +108,48 @@ fn garbage_on_the_line_is_skipped() {
 }
 
 #[test]
-fn silence_and_bad_crcs_time_out() {
-    for misbehaviour in [Misbehaviour::Silent, Misbehaviour::BadCrc] {
-        let mut bench = Bench::new(misbehaviour, None);
+fn silence_times_out() {
+    let mut bench = Bench::new(Some(Misbehaviour::Silent), None);
+    match bench.driver.reference() {
+        Err(DeviceError::NoAnswer {
+            command, waited_ms, ..
+        }) => assert_eq!((command, waited_ms), ("reference", 500)),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn garbage_bad_crcs_and_truncated_answers_are_garbled_and_say_what_came() {
+    for (misbehaviour, expected) in [
+        (Misbehaviour::Garbage, "byte(s) discarded"),
+        (Misbehaviour::BadCrc, "wrong CRC"),
+        (Misbehaviour::Truncated, "unfinished frame"),
+    ] {
+        let mut bench = Bench::new(Some(misbehaviour), None);
         match bench.driver.reference() {
-            Err(DeviceError::Timeout { waited_ms, .. }) => assert_eq!(waited_ms, 500),
+            Err(DeviceError::Garbled { detail, .. }) => {
+                assert!(detail.contains("no whole answer to reference within 500 ms"));
+                assert!(detail.contains(expected), "{misbehaviour:?}: {detail}")
+            }
             other => panic!("{misbehaviour:?}: {other:?}"),
         }
     }
 }
 
 #[test]
+fn an_error_message_ends_the_wait_with_its_meaning() {
+    let mut bench = Bench::new(Some(Misbehaviour::ErrorFrame(0xD9)), None);
+    match bench.driver.reference() {
+        Err(DeviceError::Refused { reason, .. }) => {
+            assert!(reason.contains("0xD9: emergency stop"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
 fn an_unplugged_module_is_a_lost_link_that_names_the_port() {
-    let mut bench = Bench::new(Misbehaviour::None, None);
+    let mut bench = Bench::new(None, None);
     bench.driver.reference().expect("reference");
     bench.unplug();
     match bench.driver.move_to(10.0) {

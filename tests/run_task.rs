@@ -37,7 +37,7 @@ fn shipped_with_oracle() -> (TaskFile, CellFile) {
 }
 
 fn run(task: &TaskFile, cell: &CellFile, seed: u64) -> RunRecord {
-    let mut runner = Runner::for_task(task, cell, seed);
+    let mut runner = Runner::for_task(task, cell, seed).expect("a simulated cell builds");
     runner.run_to_end();
     assert!(
         runner.state().is_final(),

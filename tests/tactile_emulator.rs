@@ -11,6 +11,7 @@ use cablecell::hw::DeviceError;
 use cablecell::hw::clock::MonotonicClock;
 use cablecell::hw::tactile::{RemodelTactile, TactileSensor};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
+use cablecell::sim::emulator::Fault;
 use cablecell::sim::emulator::tactile::{Misbehaviour, TactileEmulator};
 use serialport::{SerialPort, TTYPort};
 
@@ -31,7 +32,7 @@ struct Bench {
 }
 
 impl Bench {
-    fn new(misbehaviour: Misbehaviour) -> Self {
+    fn new(fault: Option<Fault<Misbehaviour>>) -> Self {
         let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
         master
             .set_timeout(Duration::from_millis(2))
@@ -45,9 +46,9 @@ impl Bench {
             let mut n = 0;
             let mut mcu = TactileEmulator::new(reversed(), move || {
                 n += 1;
-                frame(n)
+                Some(frame(n))
             });
-            mcu.misbehaviour = misbehaviour;
+            mcu.fault.set(fault);
             mcu.serve(master, &serving);
         });
         let name = slave.name().unwrap_or_else(|| "pty".into());
@@ -75,7 +76,7 @@ impl Drop for Bench {
 
 #[test]
 fn id_count_and_samples_in_taxel_order() {
-    let mut bench = Bench::new(Misbehaviour::None);
+    let mut bench = Bench::new(None);
     assert_eq!(bench.driver.id().expect("id"), "F001");
     assert_eq!(bench.driver.count().expect("count"), 25);
     let first = bench.driver.read().expect("sample");
@@ -91,29 +92,62 @@ fn id_count_and_samples_in_taxel_order() {
 }
 
 #[test]
-fn a_truncated_answer_times_out() {
-    let mut bench = Bench::new(Misbehaviour::Truncated);
+fn a_truncated_answer_is_garbled_and_says_how_much_came() {
+    let mut bench = Bench::new(Some(Fault::now(Misbehaviour::Truncated)));
     match bench.driver.read() {
-        Err(DeviceError::Timeout { waited_ms, .. }) => assert_eq!(waited_ms, 20),
+        Err(DeviceError::Garbled { detail, .. }) => {
+            assert!(detail.contains("25 of 50 bytes within 20 ms"), "{detail}")
+        }
         other => panic!("{other:?}"),
     }
 }
 
 #[test]
-fn a_sensor_that_falls_silent_times_out_and_earlier_samples_were_fine() {
-    let mut bench = Bench::new(Misbehaviour::SilentAfter(3));
-    for n in 1..=3 {
-        assert_eq!(bench.driver.read().expect("sample").raw, frame(n));
+fn bytes_that_are_not_samples_are_garbled() {
+    let mut bench = Bench::new(Some(Fault::now(Misbehaviour::Garbage)));
+    match bench.driver.read() {
+        Err(DeviceError::Garbled { detail, .. }) => {
+            assert!(detail.contains("not 12-bit"), "{detail}")
+        }
+        other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn a_sensor_that_vanishes_is_a_lost_link() {
+    let mut bench = Bench::new(Some(Fault {
+        misbehaviour: Misbehaviour::Vanish,
+        after_requests: 2,
+    }));
+    bench.driver.read().expect("sample");
+    bench.driver.read().expect("sample");
     assert!(matches!(
         bench.driver.read(),
-        Err(DeviceError::Timeout { .. })
+        Err(DeviceError::Disconnected { .. } | DeviceError::NoAnswer { .. })
     ));
 }
 
 #[test]
+fn a_sensor_that_falls_silent_times_out_and_earlier_samples_were_fine() {
+    let mut bench = Bench::new(Some(Fault {
+        misbehaviour: Misbehaviour::Silent,
+        after_requests: 3,
+    }));
+    for n in 1..=3 {
+        assert_eq!(bench.driver.read().expect("sample").raw, frame(n));
+    }
+    match bench.driver.read() {
+        Err(DeviceError::NoAnswer { port, command, .. }) => {
+            assert!(port.starts_with("/dev/pts/"), "{port}");
+            assert_eq!(command, "sample");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
 fn a_stray_byte_is_caught_as_a_garbled_answer() {
-    let mut bench = Bench::new(Misbehaviour::StrayByte);
+    let mut bench = Bench::new(Some(Fault::now(Misbehaviour::StrayByte)));
     match bench.driver.read() {
         Err(DeviceError::Garbled { detail, .. }) => {
             assert!(detail.contains("not 12-bit"), "{detail}")
@@ -124,7 +158,7 @@ fn a_stray_byte_is_caught_as_a_garbled_answer() {
 
 #[test]
 fn an_unplugged_sensor_is_a_lost_link() {
-    let mut bench = Bench::new(Misbehaviour::None);
+    let mut bench = Bench::new(None);
     bench.driver.read().expect("sample");
     bench.unplug();
     assert!(matches!(

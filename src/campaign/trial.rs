@@ -11,7 +11,7 @@ use crate::orchestrator::{RunOutcome, Runner};
 use crate::perception::tactile::Estimator;
 use crate::sim::{Stream, rng};
 use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
-use crate::task::cell_file::{ArmBackend, DetectorBackend, OracleConfig, TactileBackend};
+use crate::task::cell_file::{ArmBackend, DetectorBackend, OracleConfig};
 use crate::task::{CellFile, TaskFile};
 
 /// The seed of trial `index`: the same for every policy, and independent
@@ -65,8 +65,9 @@ impl Perturbation {
             offset_across_mm: self.start_offset_mm,
             offset_angle_rad: self.start_angle_rad,
         });
-        let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
-        tactile.noise_fraction = self.sensor_noise_fraction;
+        if let Some(tactile) = cell.tactile.backend.sim_pad_mut() {
+            tactile.noise_fraction = self.sensor_noise_fraction;
+        }
         cell.world.cable_diameter_mm = self.cable_diameter_mm;
         cell.world.bending_stiffness_n_mm2 = self.cable_stiffness_n_mm2;
         cell
@@ -131,8 +132,9 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
                 arm.repeatability_mm = 0.0;
             }
             ErrorSource::SensorNoise => {
-                let TactileBackend::Sim(tactile) = &mut cell.tactile.backend;
-                tactile.noise_fraction = 0.0;
+                if let Some(tactile) = cell.tactile.backend.sim_pad_mut() {
+                    tactile.noise_fraction = 0.0;
+                }
             }
             ErrorSource::SpringBack => cell.world.spring_back_fraction = 0.0,
         }
@@ -153,9 +155,28 @@ pub fn run_trial(
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
     let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell));
-    let mut runner = Runner::for_task(&task, &cell, seed);
-    runner.run_to_end();
-    let record = runner.into_record();
+    let record = Runner::for_task(&task, &cell, seed).map(|mut runner| {
+        runner.run_to_end();
+        runner.into_record()
+    });
+    let record = match record {
+        Ok(record) => record,
+        Err(error) => {
+            return TrialEntry {
+                campaign_seed,
+                trial: index,
+                policy: policy.name.clone(),
+                seed,
+                perturbation,
+                outcome: TrialOutcome::Fault,
+                detail: Some(error.to_string()),
+                grasps: Vec::new(),
+                states: Vec::new(),
+                cell_time_s: 0.0,
+                compute_time_s: started.elapsed().as_secs_f64(),
+            };
+        }
+    };
     let (outcome, detail) = match &record.outcome {
         Some(RunOutcome::Success { .. }) => (TrialOutcome::Success, None),
         Some(RunOutcome::Failed { reason }) => (TrialOutcome::Failed, Some(reason.to_string())),

@@ -32,7 +32,13 @@ pub fn calibrate_camera(cell_path: &Path, seed: u64, speed_mm_s: f64, dry_run: b
         );
         return Status::BadInput;
     }
-    let mut cell = Cell::build(&file, seed);
+    let mut cell = match Cell::build(&file, seed) {
+        Ok(cell) => cell,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::DeviceFault;
+        }
+    };
     let mut views: Vec<(Mat, Isometry3<f64>)> = Vec::with_capacity(poses.len());
     for (index, pose) in poses.iter().enumerate() {
         let captured = cell

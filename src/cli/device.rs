@@ -121,7 +121,10 @@ pub fn tactile(port: &str, baud: u32, action: &TactileAction) -> Status {
         }
     };
     let identity = std::array::from_fn(|k| k);
-    let mut sensor = RemodelTactile::new(link, port, identity, Box::new(MonotonicClock::new()));
+    // Bring-up is no control loop: room for a USB adapter's latency timer
+    // (16 ms on FTDI's) and a busy host.
+    let mut sensor = RemodelTactile::new(link, port, identity, Box::new(MonotonicClock::new()))
+        .with_deadline(Duration::from_millis(200));
     let result = match action {
         TactileAction::Id => sensor.id(),
         TactileAction::Count => sensor.count().map(|n| n.to_string()),

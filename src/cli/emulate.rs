@@ -7,11 +7,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use cablecell::geometry::LineInSensor;
-use cablecell::sim::emulator::pg70::Pg70Emulator;
+use cablecell::sim::emulator::pg70::{FreeJaws, Pg70Emulator};
 use cablecell::sim::emulator::tactile::TactileEmulator;
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
-use cablecell::task::cell_file::TactileBackend;
 use cablecell::task::load_cell;
 use serialport::{SerialPort, TTYPort};
 
@@ -43,22 +42,27 @@ pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Statu
     match device {
         Emulated::Pg70 => {
             announce(&path, &format!("a PG70, module id {module_id}"));
-            Pg70Emulator::new(module_id).serve(master, &never);
+            Pg70Emulator::new(module_id, FreeJaws::new(None)).serve(master, &never);
         }
         Emulated::Tactile => {
-            let file = match load_cell(cell) {
+            let mut file = match load_cell(cell) {
                 Ok(file) => file,
                 Err(error) => {
                     eprintln!("error: {error}");
                     return Status::BadInput;
                 }
             };
-            let TactileBackend::Sim(config) = &file.tactile.backend;
-            let model = TactileModel::new(
-                config,
-                file.tactile.pitch_mm,
-                &mut rng(1, Stream::TactileCalibration),
-            );
+            let pitch_mm = file.tactile.pitch_mm;
+            let Some(config) = file.tactile.backend.sim_pad_mut() else {
+                eprintln!(
+                    "error: {}: [tactile.backend] has no simulated pad to sample \
+                     (use a cell file with a sim or emulated_remodel tactile backend)",
+                    cell.display()
+                );
+                return Status::BadInput;
+            };
+            let model =
+                TactileModel::new(config, pitch_mm, &mut rng(1, Stream::TactileCalibration));
             let mut noise = rng(1, Stream::Tactile);
             // A 2.5 mm cable lying across the pad, slightly off its axis.
             let cable = Some((LineInSensor::new(0.1, 1.0), 2.5));
@@ -67,7 +71,7 @@ pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Statu
                 &path,
                 "the tactile finger's microcontroller, a cable on the pad",
             );
-            TactileEmulator::new(identity, move || model.frame(cable, &mut noise))
+            TactileEmulator::new(identity, move || Some(model.frame(cable, &mut noise)))
                 .serve(master, &never);
         }
     }

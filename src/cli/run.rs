@@ -19,7 +19,13 @@ pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) ->
         }
     };
     let seed = seed.or(task.task.seed).unwrap_or_else(rand::random);
-    let mut runner = Runner::for_task(&task, &cell, seed);
+    let mut runner = match Runner::for_task(&task, &cell, seed) {
+        Ok(runner) => runner,
+        Err(error) => {
+            eprintln!("error: {}: {error}; nothing was moved", cell_path.display());
+            return Status::DeviceFault;
+        }
+    };
     if json {
         runner.run_to_end();
     } else {

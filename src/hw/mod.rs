@@ -41,6 +41,15 @@ pub enum DeviceError {
     /// The device did not answer in time: check its cable, power and port.
     #[error("{device}: no answer within {waited_ms} ms")]
     Timeout { device: DeviceKind, waited_ms: u64 },
+    /// The device on a serial port did not answer in time: check its
+    /// cable, power and baud rate, and that the port is this device's.
+    #[error("{device} on {port}: no answer to {command} within {waited_ms} ms")]
+    NoAnswer {
+        device: DeviceKind,
+        port: String,
+        command: &'static str,
+        waited_ms: u64,
+    },
     /// The device refused the command; `reason` is its own explanation.
     #[error("{device}: refused {command}: {reason}")]
     Refused {
@@ -69,6 +78,35 @@ pub enum DeviceError {
     /// uncalibrated camera. Fix the cell file or the installation.
     #[error("{device}: {reason}")]
     Unusable { device: DeviceKind, reason: String },
+    /// A pose outside the cell's workspace box was asked for, and refused
+    /// before the device moved: check the task's poses, the detection or
+    /// the tactile correction that produced it, or widen the box in the
+    /// cell file if the cell really allows it.
+    #[error(
+        "{device}: refused {command} to ({:.1}, {:.1}, {:.1}) mm: outside the workspace box \
+         ({:.1}, {:.1}, {:.1})..({:.1}, {:.1}, {:.1}) mm",
+        target_mm[0], target_mm[1], target_mm[2],
+        min_mm[0], min_mm[1], min_mm[2],
+        max_mm[0], max_mm[1], max_mm[2]
+    )]
+    OutsideWorkspace {
+        device: DeviceKind,
+        command: &'static str,
+        target_mm: [f64; 3],
+        min_mm: [f64; 3],
+        max_mm: [f64; 3],
+    },
+    /// A speed above the cell's limit (or not a positive number) was asked
+    /// for, and refused before the device moved: lower the task's speed.
+    #[error(
+        "{device}: refused {command} at {speed_mm_s} mm/s: the cell allows (0, {limit_mm_s}] mm/s"
+    )]
+    TooFast {
+        device: DeviceKind,
+        command: &'static str,
+        speed_mm_s: f64,
+        limit_mm_s: f64,
+    },
 }
 
 /// Whether a read error only means that nothing arrived before the port's
@@ -85,10 +123,13 @@ impl DeviceError {
     pub fn device(&self) -> DeviceKind {
         match self {
             DeviceError::Timeout { device, .. }
+            | DeviceError::NoAnswer { device, .. }
             | DeviceError::Refused { device, .. }
             | DeviceError::Disconnected { device, .. }
             | DeviceError::Garbled { device, .. }
-            | DeviceError::Unusable { device, .. } => *device,
+            | DeviceError::Unusable { device, .. }
+            | DeviceError::OutsideWorkspace { device, .. }
+            | DeviceError::TooFast { device, .. } => *device,
         }
     }
 }

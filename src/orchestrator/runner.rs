@@ -11,6 +11,7 @@ use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
 use super::record::RunRecord;
 use crate::cell::Cell;
+use crate::hw::DeviceError;
 use crate::task::{CellFile, TaskFile};
 
 pub struct Runner {
@@ -34,10 +35,15 @@ impl Runner {
     }
 
     /// The runner of `task` on the cell of `cell_file`, its simulated
-    /// sources seeded with `seed`.
-    pub fn for_task(task: &TaskFile, cell_file: &CellFile, seed: u64) -> Self {
+    /// sources seeded with `seed`; fails if a device cannot be opened.
+    pub fn for_task(task: &TaskFile, cell_file: &CellFile, seed: u64) -> Result<Self, DeviceError> {
         let plan = Plan::new(task, cell_file);
-        Self::new(plan, Cell::build(cell_file, seed), &task.task.name, seed)
+        Ok(Self::new(
+            plan,
+            Cell::build(cell_file, seed)?,
+            &task.task.name,
+            seed,
+        ))
     }
 
     /// Handles one event: `Start` when idle, else the answer to the pending

@@ -6,7 +6,12 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
 use opencv::core::Rect;
-use serde::Deserialize;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
+
+use crate::hw::arm::WorkspaceBox;
+use crate::perception::tactile::TAXEL_COUNT;
+use crate::sim::emulator::{Fault, pg70, tactile};
 
 use super::validate::{
     camera_model, finite, fraction, non_negative, positive, unit_vector3, vector3, voltage_range,
@@ -46,7 +51,28 @@ pub struct ArmConfig {
     /// No Cartesian motion may be faster.
     #[serde(deserialize_with = "positive")]
     pub max_speed_mm_s: f64,
+    /// No move may end outside this box (the TCP in the base frame),
+    /// whatever asks for it.
+    #[serde(deserialize_with = "workspace_box")]
+    pub workspace: WorkspaceBox,
     pub backend: ArmBackend,
+}
+
+/// A box whose every `min_mm` is finite and below its `max_mm`.
+fn workspace_box<'de, D: Deserializer<'de>>(d: D) -> Result<WorkspaceBox, D::Error> {
+    let workspace = WorkspaceBox::deserialize(d)?;
+    let ordered = (0..3).all(|axis| {
+        let (min, max) = (workspace.min_mm[axis], workspace.max_mm[axis]);
+        min.is_finite() && max.is_finite() && min < max
+    });
+    if ordered {
+        Ok(workspace)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected finite min_mm below max_mm on every axis, found {:?}..{:?}",
+            workspace.min_mm, workspace.max_mm
+        )))
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -89,10 +115,73 @@ pub struct GripperConfig {
     pub backend: GripperBackend,
 }
 
+/// Which gripper: `sim` simulated (no driver), `pg70` the real driver on a
+/// real serial port, `emulated_pg70` the real driver on a pseudo-terminal
+/// to an emulated PG70 that moves the simulated jaws.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum GripperBackend {
     Sim(SimGripperConfig),
+    Pg70(Pg70Config),
+    EmulatedPg70(EmulatedPg70Config),
+}
+
+/// The PG70 over SMP on a serial port.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pg70Config {
+    /// The serial port, e.g. `/dev/ttyUSB0` (a USB-to-RS232 adapter).
+    pub port: String,
+    /// The module's baud rate (9600 unless reconfigured).
+    #[serde(default = "pg70_baud")]
+    pub baud: u32,
+    /// The module id set in the module (0x0C in the ROS driver's launch file).
+    pub module_id: u8,
+    /// How long the module may take to answer a request.
+    #[serde(default = "pg70_reply_timeout_ms")]
+    pub reply_timeout_ms: u64,
+    /// How long a move (reference, position, grip) may take to end.
+    #[serde(default = "pg70_move_timeout_ms")]
+    pub move_timeout_ms: u64,
+    /// Jaw speed and acceleration of position moves; the module's own
+    /// when left out.
+    #[serde(default)]
+    pub motion: Option<Pg70Motion>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pg70Motion {
+    #[serde(deserialize_with = "positive")]
+    pub speed_mm_s: f64,
+    #[serde(deserialize_with = "positive")]
+    pub accel_mm_s2: f64,
+}
+
+fn pg70_baud() -> u32 {
+    9600
+}
+
+fn pg70_reply_timeout_ms() -> u64 {
+    500
+}
+
+fn pg70_move_timeout_ms() -> u64 {
+    10_000
+}
+
+/// The real PG70 driver talking to an emulated PG70 (started in process on
+/// a pseudo-terminal) whose jaws are the simulated ones.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmulatedPg70Config {
+    pub module_id: u8,
+    /// The simulated jaws the emulator moves.
+    pub jaws: SimGripperConfig,
+    /// Fault injection: how the emulator misbehaves, and from which
+    /// request on.
+    #[serde(default)]
+    pub fault: Option<Fault<pg70::Misbehaviour>>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -125,10 +214,101 @@ pub struct TactileConfig {
     pub backend: TactileBackend,
 }
 
+/// Which tactile sensor: `sim` simulated (no driver), `remodel` the real
+/// driver on a real serial port, `emulated_remodel` the real driver on a
+/// pseudo-terminal to an emulated microcontroller that reads the simulated
+/// pad. The two real-driver backends are polled on their own thread at
+/// `rate_hz`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum TactileBackend {
     Sim(SimTactileConfig),
+    Remodel(RemodelConfig),
+    EmulatedRemodel(EmulatedRemodelConfig),
+}
+
+impl TactileBackend {
+    /// The simulated pad, if there is one (simulated or emulated sensors).
+    pub fn sim_pad_mut(&mut self) -> Option<&mut SimTactileConfig> {
+        match self {
+            TactileBackend::Sim(pad) => Some(pad),
+            TactileBackend::EmulatedRemodel(emulated) => Some(&mut emulated.pad),
+            TactileBackend::Remodel(_) => None,
+        }
+    }
+}
+
+/// The REMODEL finger's microcontroller on a serial port.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RemodelConfig {
+    /// The serial port, e.g. `/dev/ttyACM0`.
+    pub port: String,
+    /// The link's baud rate (1 Mbaud on the REMODEL firmware).
+    #[serde(default = "remodel_baud")]
+    pub baud: u32,
+    /// `layout[k]` is the ADC channel of taxel k (c11, c12, … c55, row by
+    /// row); the channel order is the identity when left out.
+    #[serde(default = "identity_layout", deserialize_with = "taxel_layout")]
+    pub layout: [usize; TAXEL_COUNT],
+    /// How long a sample may take to arrive whole (51 bytes take 0.51 ms).
+    #[serde(default = "remodel_deadline_ms")]
+    pub deadline_ms: u64,
+}
+
+fn remodel_baud() -> u32 {
+    1_000_000
+}
+
+fn remodel_deadline_ms() -> u64 {
+    20
+}
+
+pub fn identity_layout() -> [usize; TAXEL_COUNT] {
+    std::array::from_fn(|taxel| taxel)
+}
+
+/// 25 channels, each of 0..24 once.
+fn taxel_layout<'de, D: Deserializer<'de>>(d: D) -> Result<[usize; TAXEL_COUNT], D::Error> {
+    let layout = <[usize; TAXEL_COUNT]>::deserialize(d)?;
+    let mut seen = [false; TAXEL_COUNT];
+    for &channel in &layout {
+        match seen.get_mut(channel) {
+            Some(seen) if !*seen => *seen = true,
+            _ => {
+                return Err(D::Error::custom(format!(
+                    "expected each ADC channel 0..{} once, found {channel} {}",
+                    TAXEL_COUNT - 1,
+                    if channel < TAXEL_COUNT {
+                        "twice"
+                    } else {
+                        "out of range"
+                    }
+                )));
+            }
+        }
+    }
+    Ok(layout)
+}
+
+/// The real tactile driver talking to an emulated microcontroller (started
+/// in process on a pseudo-terminal) that samples the simulated pad.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmulatedRemodelConfig {
+    /// The channel order the emulator sends and the driver undoes.
+    #[serde(default = "identity_layout", deserialize_with = "taxel_layout")]
+    pub layout: [usize; TAXEL_COUNT],
+    /// How long a sample may take to arrive whole: the emulator shares the
+    /// host's cores, so a loaded host may want more than a real link.
+    #[serde(default = "remodel_deadline_ms")]
+    pub deadline_ms: u64,
+    /// The simulated pad the emulator samples.
+    pub pad: SimTactileConfig,
+    /// Fault injection: how the emulator misbehaves, and from which
+    /// request on.
+    #[serde(default)]
+    pub fault: Option<Fault<tactile::Misbehaviour>>,
 }
 
 /// The first simulated pad: a line-spread response, per-taxel offsets and

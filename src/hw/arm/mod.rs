@@ -2,8 +2,10 @@
 //! frame, as the Panda takes them.
 
 mod sim;
+mod workspace_limited;
 
 pub use sim::SimArm;
+pub use workspace_limited::{WorkspaceBox, WorkspaceLimited};
 
 use nalgebra::Isometry3;
 

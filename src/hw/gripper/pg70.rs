@@ -19,6 +19,9 @@ pub struct Pg70<T: Read + Write + Send> {
     reply_timeout: Duration,
     /// How long a move (reference, position, grip) may take to end.
     move_timeout: Duration,
+    /// Jaw speed and acceleration of position moves; `None` leaves the
+    /// module's own.
+    speed_accel: Option<(f32, f32)>,
 }
 
 impl<T: Read + Write + Send> Pg70<T> {
@@ -32,7 +35,22 @@ impl<T: Read + Write + Send> Pg70<T> {
             decoder: Decoder::default(),
             reply_timeout: Duration::from_millis(500),
             move_timeout: Duration::from_secs(10),
+            speed_accel: None,
         }
+    }
+
+    /// How long the module may take to answer a request, and a move to
+    /// end.
+    pub fn with_timeouts(mut self, reply_timeout: Duration, move_timeout: Duration) -> Self {
+        self.reply_timeout = reply_timeout;
+        self.move_timeout = move_timeout;
+        self
+    }
+
+    /// Position moves at this jaw speed and acceleration.
+    pub fn with_motion(mut self, speed_mm_s: f32, accel_mm_s2: f32) -> Self {
+        self.speed_accel = Some((speed_mm_s, accel_mm_s2));
+        self
     }
 
     /// The module's state once: position, velocity, current, state bits
@@ -86,7 +104,8 @@ impl<T: Read + Write + Send> Pg70<T> {
         }
     }
 
-    /// Reads until a reply that `wanted` accepts, or the deadline.
+    /// Reads until a reply that `wanted` accepts, or the deadline: a
+    /// timeout if nothing came, garbled if only unusable bytes did.
     fn wait(
         &mut self,
         name: &'static str,
@@ -94,6 +113,7 @@ impl<T: Read + Write + Send> Pg70<T> {
         wanted: impl Fn(&Reply) -> bool,
     ) -> Result<Reply, DeviceError> {
         let deadline = Instant::now() + timeout;
+        let (discarded, crc_errors) = (self.decoder.discarded_bytes, self.decoder.crc_errors);
         let mut buffer = [0u8; 64];
         loop {
             while let Some(frame) = self.decoder.next_frame() {
@@ -106,9 +126,26 @@ impl<T: Read + Write + Send> Pg70<T> {
                 }
             }
             if Instant::now() >= deadline {
-                return Err(DeviceError::Timeout {
+                let discarded = self.decoder.discarded_bytes - discarded;
+                let crc_errors = self.decoder.crc_errors - crc_errors;
+                let pending = self.decoder.pending_bytes();
+                if discarded + crc_errors + pending == 0 {
+                    return Err(DeviceError::NoAnswer {
+                        device: DeviceKind::Gripper,
+                        port: self.port_name.clone(),
+                        command: name,
+                        waited_ms: timeout.as_millis() as u64,
+                    });
+                }
+                return Err(DeviceError::Garbled {
                     device: DeviceKind::Gripper,
-                    waited_ms: timeout.as_millis() as u64,
+                    port: self.port_name.clone(),
+                    detail: format!(
+                        "no whole answer to {name} within {} ms: {discarded} byte(s) \
+                         discarded, {crc_errors} wrong CRC(s), {pending} byte(s) of an \
+                         unfinished frame",
+                        timeout.as_millis()
+                    ),
                 });
             }
             match self.port.read(&mut buffer) {
@@ -152,7 +189,7 @@ impl<T: Read + Write + Send> Gripper for Pg70<T> {
 
     fn move_to(&mut self, opening_mm: f64) -> Result<(), DeviceError> {
         self.request(
-            smp::move_pos(self.module_id, opening_mm as f32, None),
+            smp::move_pos(self.module_id, opening_mm as f32, self.speed_accel),
             "move_to",
         )?;
         match self.wait_for_move("move_to")? {

@@ -194,6 +194,11 @@ impl Decoder {
         }
     }
 
+    /// Bytes held back: the start of a frame still arriving.
+    pub fn pending_bytes(&self) -> usize {
+        self.buffer.len()
+    }
+
     fn discard(&mut self, count: usize) {
         self.buffer.drain(..count);
         self.discarded_bytes += count;

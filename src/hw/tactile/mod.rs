@@ -1,9 +1,11 @@
 //! The tactile pad: raw 12-bit readings of its 25 taxels, polled at the
 //! sensor's rate (500 Hz in the paper).
 
+mod polled;
 mod remodel;
 mod sim;
 
+pub use polled::PolledTactile;
 pub use remodel::{RemodelTactile, SerialLink};
 pub use sim::SimTactile;
 

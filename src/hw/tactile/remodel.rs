@@ -60,6 +60,12 @@ impl<L: SerialLink> RemodelTactile<L> {
         }
     }
 
+    /// How long an answer may take to arrive whole.
+    pub fn with_deadline(mut self, deadline: Duration) -> Self {
+        self.deadline = deadline;
+        self
+    }
+
     /// The sensor's 4-character id: `F…` for a tactile pad.
     pub fn id(&mut self) -> Result<String, DeviceError> {
         let mut answer = [0u8; 4];
@@ -110,10 +116,23 @@ impl<L: SerialLink> RemodelTactile<L> {
         let deadline = Instant::now() + self.deadline;
         let mut filled = 0;
         while filled < answer.len() {
-            if Instant::now() >= deadline {
-                return Err(DeviceError::Timeout {
+            if Instant::now() >= deadline && filled == 0 {
+                return Err(DeviceError::NoAnswer {
                     device: DeviceKind::Tactile,
+                    port: self.port_name.clone(),
+                    command: name,
                     waited_ms: self.deadline.as_millis() as u64,
+                });
+            }
+            if Instant::now() >= deadline {
+                return Err(DeviceError::Garbled {
+                    device: DeviceKind::Tactile,
+                    port: self.port_name.clone(),
+                    detail: format!(
+                        "{name}: answer cut short: {filled} of {} bytes within {} ms",
+                        answer.len(),
+                        self.deadline.as_millis()
+                    ),
                 });
             }
             match self.link.read(&mut answer[filled..]) {
