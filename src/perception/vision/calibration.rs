@@ -666,12 +666,11 @@ mod tests {
         assert!((right[0] - 319.5 - camera.fx_px * 0.02).abs() < 1e-9);
     }
 
-    #[test]
-    fn a_blank_image_has_no_marker() {
-        let camera = CameraModel::centred(320, 240, 1.0);
+    /// A uniform colour image and a 30 mm marker with id 7 at the TCP.
+    fn blank(width: i32, height: i32) -> (Mat, MarkerOnFinger) {
         let image = Mat::new_rows_cols_with_default(
-            240,
-            320,
+            height,
+            width,
             opencv::core::CV_8UC3,
             opencv::core::Scalar::all(200.0),
         )
@@ -682,6 +681,13 @@ mod tests {
             side_mm: 30.0,
             tcp_from_marker: Isometry3::identity(),
         };
+        (image, marker)
+    }
+
+    #[test]
+    fn a_blank_image_has_no_marker() {
+        let camera = CameraModel::centred(320, 240, 1.0);
+        let (image, marker) = blank(320, 240);
         let err = calibrate(&image, &camera, &marker, &Isometry3::identity()).unwrap_err();
         assert!(
             matches!(err, CalibrationError::NoMarker { id: 7, .. }),
@@ -692,19 +698,7 @@ mod tests {
     #[test]
     fn an_image_of_another_size_is_refused() {
         let camera = CameraModel::centred(320, 240, 1.0);
-        let image = Mat::new_rows_cols_with_default(
-            100,
-            100,
-            opencv::core::CV_8UC3,
-            opencv::core::Scalar::all(0.0),
-        )
-        .unwrap();
-        let marker = MarkerOnFinger {
-            dictionary: PREDEFINED_DICTIONARY_NAME::DICT_4X4_50,
-            id: 0,
-            side_mm: 30.0,
-            tcp_from_marker: Isometry3::identity(),
-        };
+        let (image, marker) = blank(100, 100);
         let err = calibrate(&image, &camera, &marker, &Isometry3::identity()).unwrap_err();
         assert!(matches!(err, CalibrationError::BadImage { .. }), "{err}");
     }
