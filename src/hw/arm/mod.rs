@@ -1,8 +1,12 @@
 //! The arm: Cartesian poses of the tool centre point (TCP) in the base
 //! frame, as the Panda takes them.
 
+#[cfg(feature = "panda")]
+pub mod panda;
 mod sim;
 
+#[cfg(feature = "panda")]
+pub use panda::Panda;
 pub use sim::SimArm;
 
 use nalgebra::Isometry3;
