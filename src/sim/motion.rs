@@ -1,7 +1,7 @@
-//! How long the arm takes for a straight-line Cartesian move: a
-//! jerk-limited, time-optimal profile (Ruckig) of two synchronised degrees
-//! of freedom, the distance along the path and the angle of the rotation,
-//! from rest to rest.
+//! A straight-line Cartesian move as a jerk-limited, time-optimal profile
+//! (Ruckig) of two synchronised degrees of freedom, the distance along the
+//! path and the angle of the rotation, from rest to rest: how long the
+//! simulated arm takes, and the poses the Panda driver streams.
 
 use rsruckig::prelude::{InputParameter, Ruckig, ThrowErrorHandler, Trajectory};
 

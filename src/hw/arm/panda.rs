@@ -28,10 +28,10 @@ use crate::sim::motion::{CartesianLimits, straight_line_profile};
 
 /// How long connecting (TCP connect and the protocol's handshake) may take.
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
-/// How long one request (a state, a stop, a recovery) may take.
+/// How long one request (a state, a stop, a recovery) may take. A move may
+/// take as long as it makes progress: it fails once no control cycle has
+/// passed for this long.
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(2);
-/// A move may take as long as it makes progress: it fails once no control
-/// cycle has passed for [`REQUEST_TIMEOUT`].
 /// How many reads after a recovery may still see states sent before it.
 const RECOVERY_READS: usize = 1000;
 /// A pose from the controller is a rigid transform to within this.

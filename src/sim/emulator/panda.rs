@@ -64,7 +64,7 @@ pub struct Report {
     pub recoveries: u32,
     /// Cycles in which a motion's command arrived.
     pub commanded_cycles: u64,
-    /// The highest commanded TCP speed over all motions.
+    /// The highest commanded end-effector speed over all motions.
     pub peak_speed_mm_s: f64,
 }
 
@@ -96,6 +96,11 @@ struct Controller {
 }
 
 impl Controller {
+    /// Whether an error (a reflex not yet recovered) is active.
+    fn in_error(&self) -> bool {
+        self.errors.iter().any(|&e| e)
+    }
+
     fn state(&self) -> RobotStateInter {
         let pose_m = franka_from_isometry(&self.base_from_ee);
         let identity = franka_from_isometry(&Isometry3::identity());
@@ -120,7 +125,7 @@ impl Controller {
             state.controller_mode = self.controller_mode;
             state.robot_mode = RobotMode::Move;
             state.control_command_success_rate = 1.0;
-        } else if self.errors.iter().any(|&e| e) {
+        } else if self.in_error() {
             state.robot_mode = RobotMode::Reflux;
         }
         state
@@ -272,7 +277,7 @@ impl PandaEmulator {
 
     /// Whether the controller reports an error (a reflex not yet recovered).
     pub fn has_errors(&self) -> bool {
-        lock(&self.controller).errors.iter().any(|&e| e)
+        lock(&self.controller).in_error()
     }
 
     pub fn report(&self) -> Report {
@@ -420,8 +425,7 @@ fn serve(
             Command::Move => {
                 let (controller_mode, generator_mode): (u32, u32) =
                     bincode::deserialize(&data).map_err(wire_error)?;
-                let status = if controller.errors.iter().any(|&e| e) || controller.motion.is_some()
-                {
+                let status = if controller.in_error() || controller.motion.is_some() {
                     MoveStatus::CommandNotPossibleRejected
                 } else if generator_mode != MOVE_CARTESIAN_POSITION {
                     // Only Cartesian pose motions are emulated.
@@ -443,7 +447,7 @@ fn serve(
                 respond(&writer, command, command_id, status as u8)?;
             }
             Command::StopMove => {
-                let status = if controller.errors.iter().any(|&e| e) {
+                let status = if controller.in_error() {
                     StopMoveStatus::ReflexAborted as u8
                 } else {
                     controller.end_motion(MoveStatus::Preempted);
