@@ -122,6 +122,15 @@ impl Cell {
                 sim.repeatability_mm,
                 rng(seed, Stream::Arm),
             )),
+            #[cfg(feature = "panda")]
+            ArmBackend::Panda(panda) => Box::new(crate::hw::arm::Panda::new(
+                &panda.address,
+                panda.ee_from_tcp.isometry(),
+                file.arm.max_speed_mm_s,
+                crate::hw::arm::panda::panda_limits(panda.dynamics_fraction),
+            )),
+            #[cfg(not(feature = "panda"))]
+            ArmBackend::Panda(not_built) => match *not_built {},
         };
         let arm = Box::new(WorkspaceLimited::new(
             arm,

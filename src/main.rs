@@ -175,6 +175,14 @@ enum DeviceCommand {
         #[command(subcommand)]
         action: cli::device::TactileAction,
     },
+    /// A Franka Panda over its FCI link (cablecell built with `--features panda`).
+    Arm {
+        /// The controller's host name or IPv4 address, e.g. 172.16.0.2.
+        #[arg(long)]
+        address: String,
+        #[command(subcommand)]
+        action: cli::device::ArmAction,
+    },
 }
 
 fn main() -> ExitCode {
@@ -238,6 +246,7 @@ fn main() -> ExitCode {
             DeviceCommand::Tactile { port, baud, action } => {
                 cli::device::tactile(&port, baud, &action)
             }
+            DeviceCommand::Arm { address, action } => cli::device::arm(&address, &action),
         },
         Command::Emulate { device, id, cell } => cli::emulate::emulate(device, id, &cell),
         Command::Check { files } => cli::check::check(&files),

@@ -128,8 +128,10 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
         match source {
             ErrorSource::Estimator => task.tactile.estimator = Estimator::Oracle,
             ErrorSource::Arm => {
-                let ArmBackend::Sim(arm) = &mut cell.arm.backend;
-                arm.repeatability_mm = 0.0;
+                // Only a simulated arm has a repeatability to switch off.
+                if let ArmBackend::Sim(arm) = &mut cell.arm.backend {
+                    arm.repeatability_mm = 0.0;
+                }
             }
             ErrorSource::SensorNoise => {
                 if let Some(tactile) = cell.tactile.backend.sim_pad_mut() {

@@ -1,5 +1,6 @@
-//! `cablecell device gripper|tactile --port PATH ...`: bring-up commands
-//! that talk to one device and print what it answered.
+//! `cablecell device gripper|tactile --port PATH ...` and `cablecell device
+//! arm --address HOST ...`: bring-up commands that talk to one device and
+//! print what it answered.
 
 use std::time::{Duration, Instant};
 
@@ -45,6 +46,97 @@ pub enum TactileAction {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Subcommand, Debug)]
+pub enum ArmAction {
+    /// The TCP pose in the base frame (the end effector as set in Desk).
+    State,
+    /// Move the TCP by DX DY DZ mm along a straight line in the base frame,
+    /// keeping its orientation: at most 50 mm, at most 20 mm/s.
+    #[command(allow_negative_numbers = true)]
+    MoveRel {
+        dx_mm: f64,
+        dy_mm: f64,
+        dz_mm: f64,
+        #[arg(long, default_value_t = 10.0)]
+        speed_mm_s: f64,
+    },
+    /// Stop any motion.
+    Stop,
+    /// Clear the controller's errors after a reflex (automatic error
+    /// recovery), once its cause is gone.
+    Recover,
+}
+
+#[cfg(feature = "panda")]
+pub fn arm(address: &str, action: &ArmAction) -> Status {
+    use cablecell::hw::arm::panda::panda_limits;
+    use cablecell::hw::arm::{Arm, Panda};
+    use nalgebra::{Isometry3, Translation3, Vector3};
+    // A bring-up move: short and slow enough to stop by hand, with a tenth
+    // of the Panda's acceleration and jerk.
+    const MOVE_MAX_MM: f64 = 50.0;
+    const SPEED_MAX_MM_S: f64 = 20.0;
+    const DYNAMICS_FRACTION: f64 = 0.1;
+    let describe = |pose: &Isometry3<f64>| {
+        let t = pose.translation.vector;
+        let (roll, pitch, yaw) = pose.rotation.euler_angles();
+        format!(
+            "TCP in base: x {:+.3} y {:+.3} z {:+.3} mm, roll {roll:+.4} pitch {pitch:+.4} yaw {yaw:+.4} rad",
+            t.x, t.y, t.z
+        )
+    };
+    if let ArmAction::MoveRel {
+        dx_mm,
+        dy_mm,
+        dz_mm,
+        speed_mm_s,
+    } = action
+    {
+        let offset_mm = Vector3::new(*dx_mm, *dy_mm, *dz_mm);
+        if !(offset_mm.norm() <= MOVE_MAX_MM && *speed_mm_s > 0.0 && *speed_mm_s <= SPEED_MAX_MM_S)
+        {
+            eprintln!(
+                "error: move-rel moves at most {MOVE_MAX_MM} mm at (0, {SPEED_MAX_MM_S}] mm/s; asked {:.1} mm at {speed_mm_s} mm/s",
+                offset_mm.norm()
+            );
+            return Status::BadInput;
+        }
+    }
+    let mut panda = Panda::new(
+        address,
+        Isometry3::identity(),
+        SPEED_MAX_MM_S,
+        panda_limits(DYNAMICS_FRACTION),
+    );
+    let result = match action {
+        ArmAction::State => panda.base_from_tcp().map(|pose| describe(&pose)),
+        ArmAction::MoveRel {
+            dx_mm,
+            dy_mm,
+            dz_mm,
+            speed_mm_s,
+        } => {
+            let offset = Translation3::new(*dx_mm, *dy_mm, *dz_mm);
+            panda
+                .base_from_tcp()
+                .and_then(|start| panda.move_linear(&(offset * start), *speed_mm_s))
+                .and_then(|()| panda.base_from_tcp())
+                .map(|end| format!("moved; {}", describe(&end)))
+        }
+        ArmAction::Stop => panda.stop().map(|()| "stopped".into()),
+        ArmAction::Recover => panda.recover().map(|()| "errors cleared".into()),
+    };
+    report(result)
+}
+
+#[cfg(not(feature = "panda"))]
+pub fn arm(_address: &str, _action: &ArmAction) -> Status {
+    eprintln!(
+        "error: this cablecell was built without the Panda driver: build it with `cargo build --release --features panda`"
+    );
+    Status::BadInput
 }
 
 fn open(port: &str, baud: u32) -> Result<TTYPort, String> {

@@ -1,7 +1,7 @@
-//! How long the arm takes for a straight-line Cartesian move: a
-//! jerk-limited, time-optimal profile (Ruckig) of two synchronised degrees
-//! of freedom, the distance along the path and the angle of the rotation,
-//! from rest to rest.
+//! A straight-line Cartesian move as a jerk-limited, time-optimal profile
+//! (Ruckig) of two synchronised degrees of freedom, the distance along the
+//! path and the angle of the rotation, from rest to rest: how long the
+//! simulated arm takes, and the poses the Panda driver streams.
 
 use rsruckig::prelude::{InputParameter, Ruckig, ThrowErrorHandler, Trajectory};
 
@@ -16,16 +16,18 @@ pub struct CartesianLimits {
     pub angular_jerk_rad_s3: f64,
 }
 
-/// The duration of a move of `distance_mm` along a straight line while
-/// turning by `angle_rad`, translating at no more than `speed_mm_s`; both
-/// start and end together. `None` if Ruckig finds no profile (limits not
-/// positive and finite).
-pub fn move_duration_s(
+/// The jerk-limited profile of a move of `distance_mm` along a straight
+/// line while turning by `angle_rad`, translating at no more than
+/// `speed_mm_s`; both start and end together, at rest. Its first degree of
+/// freedom is the distance travelled (mm), its second the angle turned
+/// (rad). `None` if Ruckig finds no profile (limits not positive and
+/// finite).
+pub fn straight_line_profile(
     distance_mm: f64,
     angle_rad: f64,
     speed_mm_s: f64,
     limits: &CartesianLimits,
-) -> Option<f64> {
+) -> Option<Trajectory<2>> {
     let mut input = InputParameter::<2>::new(None);
     input.target_position[0] = distance_mm;
     input.target_position[1] = angle_rad;
@@ -36,12 +38,22 @@ pub fn move_duration_s(
     input.max_jerk[0] = limits.jerk_mm_s3;
     input.max_jerk[1] = limits.angular_jerk_rad_s3;
     let mut trajectory = Trajectory::<2>::new(None);
-    // The control period only matters for stepping the trajectory, which
-    // the simulation does not do: it only needs its duration.
+    // The control period only matters for Ruckig's own stepping, which is
+    // not used: callers sample the trajectory at the times they need.
     Ruckig::<2, ThrowErrorHandler>::new(None, 0.001)
         .calculate(&input, &mut trajectory)
         .ok()
-        .map(|_| trajectory.get_duration())
+        .map(|_| trajectory)
+}
+
+/// The duration of the move of [`straight_line_profile`].
+pub fn move_duration_s(
+    distance_mm: f64,
+    angle_rad: f64,
+    speed_mm_s: f64,
+    limits: &CartesianLimits,
+) -> Option<f64> {
+    straight_line_profile(distance_mm, angle_rad, speed_mm_s, limits).map(|t| t.get_duration())
 }
 
 #[cfg(test)]

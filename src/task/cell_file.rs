@@ -79,6 +79,69 @@ fn workspace_box<'de, D: Deserializer<'de>>(d: D) -> Result<WorkspaceBox, D::Err
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum ArmBackend {
     Sim(SimArmConfig),
+    /// A Franka Panda through `franka_rust` (the `panda` cargo feature).
+    #[cfg(feature = "panda")]
+    Panda(PandaArmConfig),
+    /// Refused while loading: this build has no Panda driver.
+    #[cfg(not(feature = "panda"))]
+    Panda(PandaNotBuilt),
+}
+
+/// A real Franka Panda, reached over its FCI network link.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PandaArmConfig {
+    /// The controller's host name or IP address (the FCI link, e.g.
+    /// 172.16.0.2); the ports are the protocol's.
+    #[serde(deserialize_with = "host")]
+    pub address: String,
+    /// The cell's TCP (between the fingertips) in the end-effector frame
+    /// the controller reports (`EE`, as configured in Desk for the hand).
+    pub ee_from_tcp: FrameConfig,
+    /// The fraction of the Panda's Cartesian acceleration and jerk limits
+    /// (13 m/s², 6500 m/s³; 25 rad/s², 12500 rad/s³) and of its angular
+    /// speed (2.5 rad/s) that moves may use: 0.1 is gentle.
+    #[serde(deserialize_with = "positive_fraction")]
+    pub dynamics_fraction: f64,
+}
+
+/// A host name or IP address: not empty, no port, no spaces.
+fn host<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    let v = String::deserialize(d)?;
+    if v.is_empty() || v.contains([':', ' ', '/']) {
+        Err(serde::de::Error::custom(format!(
+            "expected a host name or IPv4 address without a port, found {v:?}"
+        )))
+    } else {
+        Ok(v)
+    }
+}
+
+/// A fraction in (0, 1].
+fn positive_fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(serde::de::Error::custom(format!(
+            "expected a fraction in (0, 1], found {v}"
+        )))
+    }
+}
+
+/// The Panda backend in a build without it: loading says how to get it.
+#[cfg(not(feature = "panda"))]
+#[derive(Debug, Clone)]
+pub enum PandaNotBuilt {}
+
+#[cfg(not(feature = "panda"))]
+impl<'de> Deserialize<'de> for PandaNotBuilt {
+    fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
+        Err(serde::de::Error::custom(
+            "this cablecell was built without the Panda driver: build it with \
+             `cargo build --release --features panda` (see the README, Bringing up devices)",
+        ))
+    }
 }
 
 /// The simulated arm: where it ends up and how long it takes. Its motion

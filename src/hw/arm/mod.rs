@@ -1,9 +1,13 @@
 //! The arm: Cartesian poses of the tool centre point (TCP) in the base
 //! frame, as the Panda takes them.
 
+#[cfg(feature = "panda")]
+pub mod panda;
 mod sim;
 mod workspace_limited;
 
+#[cfg(feature = "panda")]
+pub use panda::Panda;
 pub use sim::SimArm;
 pub use workspace_limited::{WorkspaceBox, WorkspaceLimited};
 
