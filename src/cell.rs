@@ -17,7 +17,7 @@ use serialport::{SerialPort, TTYPort};
 use crate::geometry::LineInSensor;
 use crate::hw::arm::{Arm, SimArm, WorkspaceLimited};
 use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
-use crate::hw::clock::{Clock, SimClock};
+use crate::hw::clock::{Clock, MonotonicClock, SimClock};
 use crate::hw::detector::{CableDetector, OracleDetector, VisionDetector};
 use crate::hw::gripper::{Gripper, Pg70, SimGripper};
 use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSensor};
@@ -106,7 +106,18 @@ impl Cell {
     /// opens the real devices' ports and starts the emulators.
     pub fn build(file: &CellFile, seed: u64) -> Result<Self, DeviceError> {
         let world = SimWorld::new(&file.world, file.tactile.tcp_from_sensor.isometry()).shared();
-        let clock = || -> Box<dyn Clock> { Box::new(SimClock::new(world.clone())) };
+        // A simulated arm advances the simulated world's time by its moves;
+        // with a real arm, time is the wall clock's, one start for every
+        // device.
+        let wall_clock = MonotonicClock::new();
+        let simulated_time = matches!(file.arm.backend, ArmBackend::Sim(_));
+        let clock = || -> Box<dyn Clock> {
+            if simulated_time {
+                Box::new(SimClock::new(world.clone()))
+            } else {
+                Box::new(wall_clock.clone())
+            }
+        };
         let mut emulators = Emulators::default();
         let arm: Box<dyn Arm> = match &file.arm.backend {
             ArmBackend::Sim(sim) => Box::new(SimArm::new(

@@ -266,7 +266,7 @@ mod emulated {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "127.0.0.8"));
         let file = cablecell::task::load_cell(&path).expect("cell file");
-        let mut cell = Cell::build(&file, 1);
+        let mut cell = Cell::build(&file, 1).expect("the cell builds");
         let pose = cell.arm.base_from_tcp().expect("state");
         assert_relative_eq!(pose, start_pose() * ee_from_tcp(), epsilon = 1e-9);
         let target = Translation3::new(5.0, 0.0, 0.0) * pose;

@@ -6,7 +6,9 @@ pub trait Clock: Send {
     fn now_s(&self) -> f64;
 }
 
-/// A real cell's clock: seconds since it was made.
+/// A real cell's clock: seconds since it was made (its clones share that
+/// start).
+#[derive(Clone)]
 pub struct MonotonicClock {
     start: std::time::Instant,
 }
