@@ -85,6 +85,20 @@ fn the_gripper_bring_up_commands_talk_to_the_emulated_pg70() {
         stdout(&state)
     );
     assert!(stdout(&state).contains("referenced"));
+    // A speed and an acceleration go together in the MOVE_POS frame.
+    let paced = emulator.device(&[
+        "gripper", "move-pos", "30", "--speed", "40", "--accel", "200",
+    ]);
+    assert_eq!(
+        paced.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&paced.stderr)
+    );
+    assert!(stdout(&emulator.device(&["gripper", "state"])).contains("position 30.000 mm"));
+    let half = emulator.device(&["gripper", "move-pos", "30", "--speed", "40"]);
+    assert_eq!(half.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&half.stderr).contains("--accel"));
     assert_eq!(
         stdout(&emulator.device(&["gripper", "grip", "1.0"])).trim(),
         "closed on nothing"

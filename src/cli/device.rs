@@ -20,9 +20,16 @@ pub enum GripperAction {
     State,
     /// Home the jaws (moves are refused until this is done).
     Reference,
-    /// Move the jaws to an opening.
+    /// Move the jaws to an opening, at the module's own speed and
+    /// acceleration unless both are given.
     MovePos {
         opening_mm: f64,
+        /// Jaw speed, mm/s (with --accel).
+        #[arg(long = "speed", value_name = "MM_S", requires = "accel_mm_s2")]
+        speed_mm_s: Option<f32>,
+        /// Jaw acceleration, mm/s² (with --speed).
+        #[arg(long = "accel", value_name = "MM_S2", requires = "speed_mm_s")]
+        accel_mm_s2: Option<f32>,
     },
     /// Close with a motor current until blocked.
     Grip {
@@ -155,10 +162,18 @@ pub fn gripper(port: &str, baud: u32, module_id: u8, action: &GripperAction) -> 
         }
     };
     let mut pg70 = Pg70::new(link, port, module_id);
+    if let GripperAction::MovePos {
+        speed_mm_s: Some(speed_mm_s),
+        accel_mm_s2: Some(accel_mm_s2),
+        ..
+    } = action
+    {
+        pg70 = pg70.with_motion(*speed_mm_s, *accel_mm_s2);
+    }
     let result = match action {
         GripperAction::State => pg70.state().map(|reply| describe_state(&reply)),
         GripperAction::Reference => pg70.reference().map(|()| "referenced".into()),
-        GripperAction::MovePos { opening_mm } => pg70
+        GripperAction::MovePos { opening_mm, .. } => pg70
             .move_to(*opening_mm)
             .map(|()| format!("at {opening_mm} mm")),
         GripperAction::Grip { current_a } => pg70.grip(*current_a).map(|outcome| match outcome {
