@@ -14,6 +14,7 @@ fn campaign(trials: usize, out: &Path) -> Campaign {
         trials: Some(trials),
         seed: Some(1),
         out: Some(out.to_owned()),
+        no_record: false,
     };
     Campaign::load(&path, overrides).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -22,6 +23,7 @@ fn one_trial(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("tempdir");
     let campaign = campaign(1, dir.path());
     let mut group = c.benchmark_group("trial");
+    let recordings = campaign.record.then(|| campaign.recordings_folder());
     for policy in &campaign.file.policies {
         let mut index = 0;
         group.bench_function(&policy.name, |b| {
@@ -34,6 +36,7 @@ fn one_trial(c: &mut Criterion) {
                     &campaign.file.perturbation,
                     campaign.seed,
                     index,
+                    recordings.as_deref(),
                 )
             })
         });

@@ -19,7 +19,9 @@ fn shipped() -> (TaskFile, CellFile) {
 
 fn run(task: &TaskFile, cell: &CellFile, seed: u64) -> RunRecord {
     let mut runner = Runner::for_task(task, cell, seed);
-    runner.run_to_end();
+    runner
+        .run_to_end()
+        .expect("an unrecorded run has no recording to fail");
     assert!(
         runner.state().is_final(),
         "seed {seed}: ended in {:?}",
