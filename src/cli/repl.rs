@@ -120,10 +120,6 @@ pub fn repl(
         }
     };
     let pause = Arc::new(AtomicBool::new(false));
-    let flag = pause.clone();
-    if let Err(error) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        eprintln!("warning: Ctrl-C cannot pause a run ({error}); it will stop the program");
-    }
     let mut session = Session {
         cell_path: cell_path.to_owned(),
         cell,
@@ -148,6 +144,13 @@ pub fn repl(
         }
     };
     editor.set_helper(Some(ReplHelper::new(&session)));
+    // After the editor, which takes SIGINT for itself when it is made:
+    // while a line is read the terminal is raw and Ctrl-C arrives as a key;
+    // while a task runs it is a signal, and asks for a pause.
+    let flag = session.pause.clone();
+    if let Err(error) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
+        eprintln!("warning: Ctrl-C cannot pause a run ({error}); it will stop the program");
+    }
     let history = history_path();
     // A missing history file is the first session's normal case.
     let _ = editor.load_history(&history);
@@ -411,9 +414,7 @@ impl Session {
     fn advance(&mut self, mode: Mode) -> Result<(), String> {
         let pause = self.pause.clone();
         let loaded = self.loaded()?;
-        if loaded.driver.runner.state().is_final()
-            && loaded.driver.runner.pending_command().is_none()
-        {
+        if run_over(&loaded.driver.runner) {
             return Err(format!(
                 "the run is over ({}): `reset` starts it again",
                 loaded.driver.runner.state().name()
@@ -421,14 +422,18 @@ impl Session {
         }
         // A Ctrl-C pressed while nothing ran is not a request to pause this.
         pause.store(false, Ordering::SeqCst);
-        let stop = loaded.driver.advance(mode, &pause);
-        loaded.commentary.print_new(loaded.driver.runner.record());
+        let commentary = &mut loaded.commentary;
+        let stop = loaded
+            .driver
+            .advance(mode, &pause, |runner| commentary.print_new(runner.record()));
         let stop = stop.map_err(|e| format!("{e}; the run goes on unrecorded"))?;
         let record = loaded.driver.runner.record();
+        let runner = &loaded.driver.runner;
         match stop {
-            Stop::Transition { to, .. } => {
-                println!("in {to}{}", next_command(&loaded.driver.runner))
+            Stop::Transition { to, .. } if !run_over(runner) => {
+                println!("in {to}{}", next_command(runner));
             }
+            Stop::Transition { .. } | Stop::Finished { .. } => {}
             Stop::Breakpoint { id, state } => {
                 let breakpoint = loaded.driver.breakpoints.iter().find(|b| b.id == id);
                 let condition = breakpoint
@@ -437,16 +442,14 @@ impl Session {
                     .unwrap_or_default();
                 println!(
                     "breakpoint {id} hit on entering {state}{condition}{}",
-                    next_command(&loaded.driver.runner)
+                    next_command(runner)
                 );
             }
-            Stop::Paused { state } => {
-                println!("paused in {state}{}", next_command(&loaded.driver.runner))
-            }
-            Stop::Finished { state } => {
-                println!("run over in {state}");
-                print_outcome(record);
-            }
+            Stop::Paused { state } => println!("paused in {state}{}", next_command(runner)),
+        }
+        if run_over(runner) {
+            println!("run over in {}", runner.state().name());
+            print_outcome(record);
         }
         Ok(())
     }
@@ -468,9 +471,11 @@ impl Session {
         // Carry out the safe stop now, whatever the breakpoints say.
         let breakpoints = std::mem::take(&mut loaded.driver.breakpoints);
         pause.store(false, Ordering::SeqCst);
-        let result = loaded.driver.advance(Mode::Continue, &pause);
+        let commentary = &mut loaded.commentary;
+        let result = loaded.driver.advance(Mode::Continue, &pause, |runner| {
+            commentary.print_new(runner.record())
+        });
         loaded.driver.breakpoints = breakpoints;
-        loaded.commentary.print_new(loaded.driver.runner.record());
         if let Err(error) = result {
             println!("warning: {error}; the run goes on unrecorded");
         }
@@ -491,6 +496,11 @@ fn numbered(path: &Path, run: usize) -> PathBuf {
         .extension()
         .map_or_else(String::new, |e| format!(".{}", e.to_string_lossy()));
     path.with_file_name(format!("{stem}-{run}{extension}"))
+}
+
+/// In a final state with nothing left to carry out.
+fn run_over(runner: &Runner) -> bool {
+    runner.state().is_final() && runner.pending_command().is_none()
 }
 
 fn next_command(runner: &Runner) -> String {
@@ -753,8 +763,13 @@ impl Completer for ReplHelper {
             .into_iter()
             .filter(|c| c.starts_with(word))
             .map(|c| Pair {
-                display: c.clone(),
-                replacement: c,
+                // A finished word is followed by a space, ready for the next.
+                replacement: if c.ends_with('(') {
+                    c.clone()
+                } else {
+                    format!("{c} ")
+                },
+                display: c,
             })
             .collect();
         Ok((start, pairs))

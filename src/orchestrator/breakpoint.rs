@@ -714,7 +714,7 @@ mod tests {
         assert_eq!(
             e,
             ConditionError::Syntax {
-                column: 13,
+                column: 12,
                 expected: "a number, a name or `(`",
                 found: "the end".into()
             }

@@ -60,13 +60,19 @@ impl Driver {
         }
     }
 
-    /// Runs until `mode` says stop. `pause` is the operator's request to
-    /// pause (set by Ctrl-C): checked, and cleared when taken, at every
-    /// safe point of a `Continue`.
+    /// Runs until `mode` says stop, calling `on_step` after every step (to
+    /// show the run as it goes). `pause` is the operator's request to pause
+    /// (set by Ctrl-C): checked, and cleared when taken, at every safe
+    /// point of a `Continue`.
     ///
     /// A recording error is returned once, after the step that met it;
     /// the run can go on unrecorded.
-    pub fn advance(&mut self, mode: Mode, pause: &AtomicBool) -> Result<Stop, RecordingError> {
+    pub fn advance(
+        &mut self,
+        mode: Mode,
+        pause: &AtomicBool,
+        mut on_step: impl FnMut(&Runner),
+    ) -> Result<Stop, RecordingError> {
         let (wall_start, cell_start_s) = (Instant::now(), self.runner.now_s());
         loop {
             let transitions = self.runner.record().transitions.len();
@@ -76,6 +82,7 @@ impl Driver {
                 });
             }
             self.wait_for_pace(wall_start, cell_start_s, pause);
+            on_step(&self.runner);
             let record = self.runner.record();
             if let Some(entered) = record
                 .transitions
@@ -140,7 +147,7 @@ mod tests {
         let mut stepped = driver(3);
         let mut stops = Vec::new();
         loop {
-            match stepped.advance(Mode::Step, &no_pause).unwrap() {
+            match stepped.advance(Mode::Step, &no_pause, |_| {}).unwrap() {
                 Stop::Transition { to, .. } => stops.push(to),
                 Stop::Finished { state } => {
                     assert_eq!(state, "done");
@@ -151,7 +158,9 @@ mod tests {
         }
         let mut continued = driver(3);
         assert_eq!(
-            continued.advance(Mode::Continue, &no_pause).unwrap(),
+            continued
+                .advance(Mode::Continue, &no_pause, |_| {})
+                .unwrap(),
             Stop::Finished { state: "done" }
         );
         let states: Vec<_> = continued
@@ -174,7 +183,7 @@ mod tests {
             .add("regrasp", Some("abs(n_mm) > 100"))
             .unwrap();
         assert_eq!(
-            d.advance(Mode::Continue, &no_pause).unwrap(),
+            d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
             Stop::Breakpoint {
                 id: 1,
                 state: "trial_grasp"
@@ -185,12 +194,12 @@ mod tests {
         assert!(d.runner.pending_command().is_some());
         let pause = AtomicBool::new(true);
         assert_eq!(
-            d.advance(Mode::Continue, &pause).unwrap(),
+            d.advance(Mode::Continue, &pause, |_| {}).unwrap(),
             Stop::Paused { state: "evaluate" }
         );
         assert!(!pause.load(Ordering::SeqCst), "the request is taken");
         assert_eq!(
-            d.advance(Mode::Continue, &no_pause).unwrap(),
+            d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
             Stop::Finished { state: "done" }
         );
     }
