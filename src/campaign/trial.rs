@@ -90,9 +90,10 @@ pub struct TrialEntry {
     pub cell_time_s: f64,
     /// Computation time of the trial (not reproducible: wall clock).
     pub compute_time_s: f64,
-    /// The trial's recording, if one was written.
+    /// The trial's recording, if one was written: its file name in the
+    /// campaign's recordings folder (so the output folder can move).
     #[serde(default)]
-    pub recording: Option<PathBuf>,
+    pub recording: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -171,7 +172,7 @@ pub fn run_trial(
         .and_then(|_| runner.run_to_end())
         .and_then(|()| runner.finish_recording());
     let recording = match recorded {
-        Ok(path) => path,
+        Ok(path) => path.and_then(|p| Some(p.file_name()?.to_string_lossy().into_owned())),
         Err(error) => {
             tracing::warn!(
                 trial = index,

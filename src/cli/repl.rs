@@ -26,7 +26,7 @@ use super::run::{
 
 /// The commands, their arguments and what they do, for `help` and
 /// completion.
-const COMMANDS: [(&str, &str, &str); 17] = [
+const COMMANDS: [(&str, &str, &str); 16] = [
     ("load", "TASK", "load a task file and start a new run of it"),
     (
         "reset",
@@ -79,7 +79,6 @@ const COMMANDS: [(&str, &str, &str); 17] = [
     ("help", "", "this list"),
     ("quit", "", "leave (Ctrl-D too)"),
     ("exit", "", "same as quit"),
-    ("c", "", "same as continue"),
 ];
 
 const SHOW_TOPICS: [&str; 3] = ["tactile", "pose", "params"];
@@ -220,23 +219,28 @@ impl Session {
             .seed
             .or(params.task().task.seed)
             .unwrap_or_else(rand::random);
-        let breakpoints = self.end_run().unwrap_or_default();
-        let runner = self.new_runner(&params, seed);
-        let mut driver = Driver::new(runner);
-        driver.breakpoints = breakpoints;
-        driver.pace = self.pace;
         println!(
             "loaded task {} from {} (seed {seed})",
             params.task().task.name,
             path.display()
         );
+        self.start(params, seed);
+        Ok(())
+    }
+
+    /// Ends the current run, if any, and starts a new one from idle; the
+    /// breakpoints carry over.
+    fn start(&mut self, params: TaskParams, seed: u64) {
+        let breakpoints = self.end_run().unwrap_or_default();
+        let mut driver = Driver::new(self.new_runner(&params, seed));
+        driver.breakpoints = breakpoints;
+        driver.pace = self.pace;
         self.task = Some(Loaded {
             params,
             seed,
             driver,
             commentary: Commentary::default(),
         });
-        Ok(())
     }
 
     fn new_runner(&mut self, params: &TaskParams, seed: u64) -> Runner {
@@ -290,16 +294,7 @@ impl Session {
                     let loaded = self.loaded()?;
                     (loaded.params.clone(), loaded.seed)
                 };
-                let breakpoints = self.end_run().unwrap_or_default();
-                let mut driver = Driver::new(self.new_runner(&params, seed));
-                driver.breakpoints = breakpoints;
-                driver.pace = self.pace;
-                self.task = Some(Loaded {
-                    params,
-                    seed,
-                    driver,
-                    commentary: Commentary::default(),
-                });
+                self.start(params, seed);
                 println!("reset: idle (seed {seed})");
             }
             "step" | "s" => {
@@ -527,6 +522,7 @@ fn print_help() {
     for (name, args, what) in COMMANDS {
         println!("  {:<28} {what}", format!("{name} {args}"));
     }
+    println!("(step, continue and break also as s, c and b)");
     println!("states: {}", State::NAMES.join(", "));
     println!("values for `break STATE if EXPR` (`values` shows them now):");
     println!("  {}", RunValues::NAMES.join(", "));

@@ -103,27 +103,32 @@ impl Recorder {
             .map_err(RecordingError::mcap(&self.path))
     }
 
-    /// Tactile frames as read in `state`, raw and (once the bias is known)
-    /// Δv. The first frames read are the bias frames.
+    /// Tactile frames as read in `state`: raw, and Δv once the bias is
+    /// known. The first frames read are the bias frames: their raw counts
+    /// are the bias's input (a replay measures it again from them), and
+    /// their Δv, noise around zero, is not written, which halves what a
+    /// campaign writes.
     pub fn tactile_frames(
         &mut self,
         state: &str,
         frames: &[TactileFrame],
     ) -> Result<(), RecordingError> {
-        if self.bias.is_none() {
+        let bias = self.bias.clone();
+        if bias.is_none() {
             let mut estimator = BiasEstimator::new(frames.len());
             self.bias = frames.iter().find_map(|frame| estimator.push(&frame.raw));
         }
         for frame in frames {
+            let timestamp = Timestamp::of(frame.t_s);
             let raw = TactileRawMessage {
-                timestamp: Timestamp::of(frame.t_s),
+                timestamp,
                 state: state.to_owned(),
                 counts: frame.raw,
             };
             self.write(Topic::TactileRaw, frame.t_s, &raw)?;
-            if let Some(bias) = &self.bias {
+            if let Some(bias) = &bias {
                 let dv = TactileDvMessage {
-                    timestamp: raw.timestamp,
+                    timestamp,
                     state: raw.state,
                     dv_v: row_major(&bias.remove(&frame.raw)),
                 };
@@ -251,10 +256,12 @@ impl Recorder {
     }
 }
 
+/// The map's Δv, row-major, rounded to the µV: far below the ADC's step
+/// (0.8 mV), and a third of the text of a full-precision float.
 fn row_major(map: &TactileMap) -> [f64; 25] {
     let mut values = [0.0; 25];
     for (value, dv) in values.iter_mut().zip(map.dv_v.iter().flatten()) {
-        *value = *dv;
+        *value = (dv * 1e6).round() / 1e6;
     }
     values
 }
