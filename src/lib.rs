@@ -7,5 +7,6 @@ pub mod geometry;
 pub mod hw;
 pub mod orchestrator;
 pub mod perception;
+pub mod recording;
 pub mod sim;
 pub mod task;

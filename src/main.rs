@@ -38,7 +38,38 @@ enum Command {
         /// Print one JSON report instead of the running commentary.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        record: cli::run::RecordArgs,
     },
+    /// Step a task interactively: breakpoints, pauses, the sensors' view,
+    /// parameters changed on the way (`help` inside lists the commands).
+    Repl {
+        /// The task file to load first, e.g. tasks/regrasp.toml.
+        task: Option<PathBuf>,
+        /// The cell file.
+        #[arg(long, default_value = "config/cell.sim.toml")]
+        cell: PathBuf,
+        /// Seed of the simulated cell (default: the task file's, else random).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Cell seconds per wall-clock second while a task runs (a simulated
+        /// cell runs at a real one's speed with 1); 0: as fast as it goes.
+        #[arg(long, default_value_t = 1.0)]
+        pace: f64,
+        #[command(flatten)]
+        record: cli::run::RecordArgs,
+    },
+    /// Print a recording's timeline, and fit its tactile frames again.
+    Replay {
+        /// The recording (MCAP), e.g. runs/regrasp-seed3-….mcap.
+        file: PathBuf,
+        /// Fit the recorded frames again with these estimators (centroids,
+        /// ridge, oracle), to compare them on the same inputs.
+        #[arg(long, value_delimiter = ',', value_parser = parse_estimator)]
+        estimator: Vec<cablecell::perception::tactile::Estimator>,
+    },
+    /// Print the task's state machine as Graphviz DOT (`| dot -Tsvg`).
+    Graph { task: PathBuf },
     /// Run a campaign: many seeded trials of a task, each policy of the file
     /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
     /// summarised side by side.
@@ -63,6 +94,10 @@ enum Command {
         /// Worker threads (default: one per core). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Write no recordings (by default each trial is recorded to
+        /// OUT/recordings/trial-NNNNNN-POLICY.mcap).
+        #[arg(long)]
+        no_record: bool,
     },
     /// Find every cable in images: its B-spline, the grasp point at s = 0.5
     /// and the cable's direction there, and the time spent in each stage.
@@ -185,6 +220,11 @@ enum DeviceCommand {
     },
 }
 
+fn parse_estimator(text: &str) -> Result<cablecell::perception::tactile::Estimator, String> {
+    serde_json::from_value(serde_json::Value::String(text.to_owned()))
+        .map_err(|_| format!("`{text}`: expected centroids, ridge or oracle"))
+}
+
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
@@ -196,7 +236,17 @@ fn main() -> ExitCode {
             cell,
             seed,
             json,
-        } => cli::run::run(&task, &cell, seed, json),
+            record,
+        } => cli::run::run(&task, &cell, seed, json, &record),
+        Command::Repl {
+            task,
+            cell,
+            seed,
+            pace,
+            record,
+        } => cli::repl::repl(task.as_deref(), &cell, seed, record, pace),
+        Command::Replay { file, estimator } => cli::replay::replay(&file, &estimator),
+        Command::Graph { task } => cli::graph::graph(&task),
         Command::Campaign {
             file,
             trials,
@@ -205,8 +255,14 @@ fn main() -> ExitCode {
             resume,
             json,
             threads,
+            no_record,
         } => {
-            let overrides = cablecell::campaign::run::Overrides { trials, seed, out };
+            let overrides = cablecell::campaign::run::Overrides {
+                trials,
+                seed,
+                out,
+                no_record,
+            };
             let threads = threads.unwrap_or_else(|| {
                 std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
             });

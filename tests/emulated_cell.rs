@@ -56,7 +56,10 @@ fn run(
     };
     let mut runner = Runner::new(Plan::new(task, cell_file), cell, &task.task.name, SEED);
     let mut switch = Some(switch);
-    while runner.step() {
+    while runner
+        .step()
+        .expect("an unrecorded run has no recording to fail")
+    {
         if runner.record().current_state() == switch_in
             && let Some(switch) = switch.take()
         {

@@ -1,16 +1,14 @@
 //! The regrasp task end to end on the simulated cell, through the library
 //! and through the `cablecell run` command.
 
-use std::path::Path;
 use std::process::{Command, Output};
 
-use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
-use cablecell::task::cell_file::{DetectorBackend, OracleConfig};
-use cablecell::task::{CellFile, TaskFile, load_cell, load_task};
+mod common;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+use common::root;
+
+use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
+use cablecell::task::{CellFile, TaskFile, load_cell, load_task};
 
 fn shipped() -> (TaskFile, CellFile) {
     let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");
@@ -18,27 +16,16 @@ fn shipped() -> (TaskFile, CellFile) {
     (task, cell)
 }
 
-/// `cell` with its vision detector replaced by an oracle that misses the
-/// true grasp frame by σ = 3 mm and 0.2 rad: trial grasps off by the
-/// paper's few millimetres, for the tests of the regrasp.
-fn with_oracle(mut cell: CellFile, position_noise_mm: f64, angle_noise_rad: f64) -> CellFile {
-    cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
-        position_noise_mm,
-        angle_noise_rad,
-        offset_across_mm: 0.0,
-        offset_angle_rad: 0.0,
-    });
-    cell
-}
-
 fn shipped_with_oracle() -> (TaskFile, CellFile) {
-    let (task, cell) = shipped();
-    (task, with_oracle(cell, 3.0, 0.2))
+    let (task, _) = shipped();
+    (task, common::sim_cell_with_oracle())
 }
 
 fn run(task: &TaskFile, cell: &CellFile, seed: u64) -> RunRecord {
     let mut runner = Runner::for_task(task, cell, seed).expect("a simulated cell builds");
-    runner.run_to_end();
+    runner
+        .run_to_end()
+        .expect("an unrecorded run has no recording to fail");
     assert!(
         runner.state().is_final(),
         "seed {seed}: ended in {:?}",
@@ -136,7 +123,7 @@ fn the_sequence_visits_every_state_in_order() {
 #[test]
 fn a_trial_grasp_within_tolerance_skips_the_regrasp() {
     let (task, cell) = shipped();
-    let mut cell = with_oracle(cell, 0.0, 0.0);
+    let mut cell = common::with_oracle(cell, 0.0, 0.0);
     cell.world.cable_tilt_rad = 0.0;
     let record = run(&task, &cell, 5);
     assert!(

@@ -40,6 +40,8 @@ pub struct Overrides {
     pub trials: Option<usize>,
     pub seed: Option<u64>,
     pub out: Option<PathBuf>,
+    /// Write no recording of the trials.
+    pub no_record: bool,
 }
 
 /// A campaign file with its task and cell loaded and overrides applied.
@@ -51,6 +53,8 @@ pub struct Campaign {
     pub trials: usize,
     pub seed: u64,
     pub out: PathBuf,
+    /// Whether each trial is recorded in `recordings_folder`.
+    pub record: bool,
 }
 
 impl Campaign {
@@ -62,6 +66,7 @@ impl Campaign {
             trials: overrides.trials.unwrap_or(file.campaign.trials),
             seed: overrides.seed.unwrap_or(file.campaign.seed),
             out: overrides.out.unwrap_or_else(|| file.campaign.out.clone()),
+            record: !overrides.no_record,
             file,
             task,
             cell,
@@ -70,6 +75,11 @@ impl Campaign {
 
     pub fn journal_path(&self) -> PathBuf {
         self.out.join("trials.jsonl")
+    }
+
+    /// Where each trial's recording goes (`trial-NNNNNN-POLICY.mcap`).
+    pub fn recordings_folder(&self) -> PathBuf {
+        self.out.join("recordings")
     }
 
     pub fn policy_names(&self) -> Vec<String> {
@@ -124,6 +134,7 @@ impl Campaign {
             .collect();
         entries.iter().for_each(&mut on_entry);
 
+        let recordings = self.record.then(|| self.recordings_folder());
         let next_job = AtomicUsize::new(0);
         let stop = AtomicBool::new(false);
         let (sender, receiver) = mpsc::channel::<TrialEntry>();
@@ -132,6 +143,7 @@ impl Campaign {
             for _ in 0..threads.max(1) {
                 let sender = sender.clone();
                 let (next_job, stop, jobs) = (&next_job, &stop, &jobs);
+                let recordings = recordings.as_deref();
                 scope.spawn(move || {
                     while !stop.load(Ordering::Relaxed) {
                         let Some(&(trial, policy)) =
@@ -146,6 +158,7 @@ impl Campaign {
                             &self.file.perturbation,
                             self.seed,
                             trial,
+                            recordings,
                         );
                         if sender.send(entry).is_err() {
                             break;

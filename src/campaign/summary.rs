@@ -252,6 +252,7 @@ mod tests {
             states: Vec::new(),
             cell_time_s: 4.0 + trial as f64,
             compute_time_s: 0.001,
+            recording: None,
         }
     }
 

@@ -1,6 +1,7 @@
 //! One trial of a campaign: its seed, the perturbation drawn from it, and
 //! what the run gave, as written to the campaign's journal.
 
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use rand::RngExt;
@@ -93,6 +94,10 @@ pub struct TrialEntry {
     pub cell_time_s: f64,
     /// Computation time of the trial (not reproducible: wall clock).
     pub compute_time_s: f64,
+    /// The trial's recording, if one was written: its file name in the
+    /// campaign's recordings folder (so the output folder can move).
+    #[serde(default)]
+    pub recording: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -144,7 +149,14 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
     (task, cell)
 }
 
-/// Runs trial `index` of a campaign with one policy.
+/// Where trial `index` of `policy` is recorded in `folder`.
+pub fn recording_path(folder: &Path, policy: &str, index: usize) -> PathBuf {
+    folder.join(format!("trial-{index:06}-{policy}.mcap"))
+}
+
+/// Runs trial `index` of a campaign with one policy, recording it in
+/// `recordings` (a folder) if given. A recording that cannot be written is
+/// logged and the trial goes on without it.
 pub fn run_trial(
     task: &TaskFile,
     cell: &CellFile,
@@ -152,17 +164,14 @@ pub fn run_trial(
     ranges: &Perturbations,
     campaign_seed: u64,
     index: usize,
+    recordings: Option<&Path>,
 ) -> TrialEntry {
     let started = Instant::now();
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
     let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell));
-    let record = Runner::for_task(&task, &cell, seed).map(|mut runner| {
-        runner.run_to_end();
-        runner.into_record()
-    });
-    let record = match record {
-        Ok(record) => record,
+    let mut runner = match Runner::for_task(&task, &cell, seed) {
+        Ok(runner) => runner,
         Err(error) => {
             return TrialEntry {
                 campaign_seed,
@@ -176,9 +185,29 @@ pub fn run_trial(
                 states: Vec::new(),
                 cell_time_s: 0.0,
                 compute_time_s: started.elapsed().as_secs_f64(),
+                recording: None,
             };
         }
     };
+    let path = recordings.map(|folder| recording_path(folder, &policy.name, index));
+    let recorded = path
+        .as_deref()
+        .map(|path| runner.record_to(path, false))
+        .transpose()
+        .and_then(|_| runner.run_to_end())
+        .and_then(|()| runner.finish_recording());
+    let recording = match recorded {
+        Ok(path) => path.and_then(|p| Some(p.file_name()?.to_string_lossy().into_owned())),
+        Err(error) => {
+            tracing::warn!(
+                trial = index,
+                policy = policy.name,
+                "{error}; the trial goes on unrecorded"
+            );
+            None
+        }
+    };
+    let record = runner.into_record();
     let (outcome, detail) = match &record.outcome {
         Some(RunOutcome::Success { .. }) => (TrialOutcome::Success, None),
         Some(RunOutcome::Failed { reason }) => (TrialOutcome::Failed, Some(reason.to_string())),
@@ -215,5 +244,6 @@ pub fn run_trial(
         states,
         cell_time_s: record.transitions.last().map_or(0.0, |t| t.t_s),
         compute_time_s: started.elapsed().as_secs_f64(),
+        recording,
     }
 }

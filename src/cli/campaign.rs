@@ -65,6 +65,12 @@ pub fn campaign(
     } else {
         print!("{}", render_table(&summary));
         println!("trials recorded in {}", campaign.journal_path().display());
+        if campaign.record {
+            println!(
+                "each trial's recording in {}",
+                campaign.recordings_folder().display()
+            );
+        }
     }
     Status::Success
 }

@@ -1,14 +1,67 @@
 //! `cablecell run TASK`
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
 
-use cablecell::orchestrator::record::{GraspRecord, RunReport};
+use cablecell::orchestrator::record::{GraspRecord, RunReport, TransitionRecord};
 use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
 use cablecell::task::{load_cell, load_task};
 
 use super::Status;
 
-pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) -> Status {
+/// Where a run is recorded: `--record PATH`, else a new file under
+/// `runs/`, or nowhere with `--no-record`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RecordArgs {
+    /// Record the run to this MCAP file (default: runs/TASK-seedN-TIME.mcap).
+    #[arg(long, value_name = "PATH")]
+    pub record: Option<PathBuf>,
+    /// Write no recording.
+    #[arg(long, conflicts_with = "record")]
+    pub no_record: bool,
+}
+
+impl RecordArgs {
+    /// The file to record a run of `task` with `seed` to, if any.
+    pub fn path(&self, task: &str, seed: u64) -> Option<PathBuf> {
+        if self.no_record {
+            return None;
+        }
+        Some(self.record.clone().unwrap_or_else(|| {
+            let ms = SystemTime::now()
+                .duration_since(UNIX_EPOCH)
+                .map_or(0, |d| d.as_millis());
+            PathBuf::from("runs").join(format!("{task}-seed{seed}-{ms}.mcap"))
+        }))
+    }
+}
+
+/// Starts recording `runner` to `path`; a failure is reported and the run
+/// goes on unrecorded.
+pub(super) fn start_recording(runner: &mut Runner, path: Option<&Path>) {
+    if let Some(path) = path
+        && let Err(error) = runner.record_to(path, true)
+    {
+        eprintln!("warning: {error}; the run goes on unrecorded");
+    }
+}
+
+/// Finishes `runner`'s recording and says where it is.
+pub(super) fn finish_recording(runner: &mut Runner) {
+    match runner.finish_recording() {
+        Ok(Some(path)) => eprintln!("recorded to {}", path.display()),
+        Ok(None) => {}
+        Err(error) => eprintln!("warning: {error}"),
+    }
+}
+
+pub fn run(
+    task_path: &Path,
+    cell_path: &Path,
+    seed: Option<u64>,
+    json: bool,
+    record: &RecordArgs,
+) -> Status {
     let (task, cell) = match (load_task(task_path), load_cell(cell_path)) {
         (Ok(task), Ok(cell)) => (task, cell),
         (task, cell) => {
@@ -26,8 +79,11 @@ pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) ->
             return Status::DeviceFault;
         }
     };
+    start_recording(&mut runner, record.path(&task.task.name, seed).as_deref());
     if json {
-        runner.run_to_end();
+        if let Err(error) = runner.run_to_end() {
+            eprintln!("warning: {error}; the run went on unrecorded");
+        }
     } else {
         println!(
             "task {} on {} (seed {seed})",
@@ -38,25 +94,16 @@ pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) ->
             "target n* = {:+.3} mm, α* = {:+.4} rad; tolerance ±{} mm, ±{} rad",
             target.n_mm, target.alpha_rad, tolerance.n_mm, tolerance.alpha_rad
         );
-        let (mut transitions, mut grasps) = (0, 0);
-        while runner.step() {
-            let record = runner.record();
-            record.grasps[grasps..].iter().for_each(print_grasp);
-            grasps = record.grasps.len();
-            for (i, t) in record.transitions.iter().enumerate().skip(transitions) {
-                let entered_s = i.checked_sub(1).map_or(0.0, |p| record.transitions[p].t_s);
-                println!(
-                    "{:9.3} s  {:>11} → {:<11}  ({} took {:.3} s)",
-                    t.t_s,
-                    t.from,
-                    t.to,
-                    t.from,
-                    t.t_s - entered_s
-                );
+        let mut commentary = Commentary::default();
+        loop {
+            match runner.step() {
+                Ok(true) => commentary.print_new(runner.record()),
+                Ok(false) => break,
+                Err(error) => eprintln!("warning: {error}; the run goes on unrecorded"),
             }
-            transitions = record.transitions.len();
         }
     }
+    finish_recording(&mut runner);
     let record = runner.into_record();
     if json {
         match serde_json::to_string_pretty(&RunReport::new(&record)) {
@@ -66,6 +113,11 @@ pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) ->
     } else {
         print_outcome(&record);
     }
+    outcome_status(&record)
+}
+
+/// The exit status of a run's outcome.
+pub(super) fn outcome_status(record: &RunRecord) -> Status {
     match record.outcome {
         Some(RunOutcome::Success { .. }) => Status::Success,
         Some(RunOutcome::Failed { .. }) => Status::TaskFailed,
@@ -73,7 +125,39 @@ pub fn run(task_path: &Path, cell_path: &Path, seed: Option<u64>, json: bool) ->
     }
 }
 
-fn print_grasp(grasp: &GraspRecord) {
+/// Prints what a run added to its record since the last call: grasps,
+/// then transitions with the time spent in the state left.
+#[derive(Debug, Default)]
+pub(super) struct Commentary {
+    transitions: usize,
+    grasps: usize,
+}
+
+impl Commentary {
+    pub(super) fn print_new(&mut self, record: &RunRecord) {
+        record.grasps[self.grasps..].iter().for_each(print_grasp);
+        self.grasps = record.grasps.len();
+        for (i, t) in record.transitions.iter().enumerate().skip(self.transitions) {
+            print_transition(record, i, t);
+        }
+        self.transitions = record.transitions.len();
+    }
+}
+
+/// Transition `i` of `record`, with the time spent in the state it left.
+pub(super) fn print_transition(record: &RunRecord, i: usize, t: &TransitionRecord) {
+    let entered_s = i.checked_sub(1).map_or(0.0, |p| record.transitions[p].t_s);
+    println!(
+        "{:9.3} s  {:>11} → {:<11}  ({} took {:.3} s)",
+        t.t_s,
+        t.from,
+        t.to,
+        t.from,
+        t.t_s - entered_s
+    );
+}
+
+pub(super) fn print_grasp(grasp: &GraspRecord) {
     let name = match grasp.attempt {
         0 => "trial grasp".to_owned(),
         k => format!("regrasp {k}"),
@@ -99,7 +183,7 @@ fn print_grasp(grasp: &GraspRecord) {
     }
 }
 
-fn print_outcome(record: &RunRecord) {
+pub(super) fn print_outcome(record: &RunRecord) {
     let tolerance = &record.tolerance;
     match &record.outcome {
         Some(RunOutcome::Success { regrasps }) => println!(

@@ -68,6 +68,12 @@ impl GraspTask {
             regrasps_done: 0,
         }
     }
+
+    /// Replaces the plan between two events (the REPL's `set`): what the
+    /// run learnt stays; the next entry action and judgement use it.
+    pub(super) fn set_plan(&mut self, plan: Plan) {
+        self.plan = plan;
+    }
 }
 
 #[state_machine(
@@ -378,6 +384,21 @@ impl GraspTask {
 }
 
 impl State {
+    /// Every state's name, in the order of the sequence.
+    pub const NAMES: [&'static str; 11] = [
+        "idle",
+        "prepare",
+        "detect",
+        "approach",
+        "trial_grasp",
+        "evaluate",
+        "regrasp",
+        "verify",
+        "done",
+        "failed",
+        "fault",
+    ];
+
     /// The state's name as records and reports spell it.
     pub fn name(&self) -> &'static str {
         match self {

@@ -1,15 +1,23 @@
 //! The grasp sequence: a hierarchical state machine that does no I/O
 //! (`machine`), the commands it asks for and the events that answer them
 //! (`command`), the executor that carries commands out on a cell
-//! (`executor`), the runner that feeds one to the other (`runner`), and the
-//! run record every run writes (`record`).
+//! (`executor`), the runner that feeds one to the other (`runner`), the
+//! run record every run writes (`record`), and for the REPL the driver that
+//! steps, pauses and breaks (`driver`, `breakpoint`); `graph` draws the
+//! machine.
 
+pub mod breakpoint;
 pub mod command;
+pub mod driver;
 pub mod executor;
+pub mod graph;
 pub mod machine;
+pub mod params;
 pub mod plan;
 pub mod record;
 pub mod runner;
+#[cfg(test)]
+mod test_cell;
 
 pub use command::{Command, Event};
 pub use machine::{Context, GraspTask, State};

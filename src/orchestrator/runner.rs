@@ -1,36 +1,55 @@
 //! Feeds the machine: carries out its pending command on the cell and
 //! hands it the answer, one event per step, so that a caller can run a
-//! task to the end or step through it.
+//! task to the end or step through it. A run with a recorder attached
+//! writes every event, transition and grasp to it as it goes.
 
+use std::path::{Path, PathBuf};
+
+use nalgebra::Isometry3;
 use statig::blocking::InitializedStateMachine;
 use statig::prelude::*;
 
-use super::command::Event;
+use super::command::{Command, Event};
 use super::executor::execute;
 use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
 use super::record::RunRecord;
 use crate::cell::Cell;
 use crate::hw::DeviceError;
+use crate::recording::schema::{RunMessage, Timestamp};
+use crate::recording::{Recorder, RecordingError, Topic};
 use crate::task::{CellFile, TaskFile};
 
 pub struct Runner {
     machine: InitializedStateMachine<GraspTask>,
     context: Context,
     cell: Cell,
+    plan: Plan,
+    recording: Option<Recording>,
+}
+
+/// A recorder and how far the record has been written to it.
+struct Recording {
+    recorder: Recorder,
+    transitions: usize,
+    grasps: usize,
+    /// Flush after every step (interactive runs), or only at the end.
+    flush_each_step: bool,
 }
 
 impl Runner {
     pub fn new(plan: Plan, cell: Cell, task_name: &str, seed: u64) -> Self {
         let record = RunRecord::new(task_name, &cell.name, seed, plan.target, plan.tolerance);
         let mut context = Context::new(record);
-        let machine = GraspTask::new(plan)
+        let machine = GraspTask::new(plan.clone())
             .uninitialized_state_machine()
             .init_with_context(&mut context);
         Self {
             machine,
             context,
             cell,
+            plan,
+            recording: None,
         }
     }
 
@@ -46,33 +65,190 @@ impl Runner {
         ))
     }
 
-    /// Handles one event: `Start` when idle, else the answer to the pending
-    /// command. Returns `false` once there is nothing left to do.
-    pub fn step(&mut self) -> bool {
-        let event = match self.context.command.take() {
-            Some(command) => {
-                tracing::debug!(?command, state = self.machine.state().name(), "executing");
-                execute(&mut self.cell, &command)
-            }
-            None if matches!(self.machine.state(), State::Idle { .. }) => Event::Start,
-            None => return false,
+    /// Records the run to a new MCAP file at `path` from now on.
+    /// `flush_each_step` makes every step durable as it ends (for runs a
+    /// person watches); a campaign's trials flush only when they finish.
+    pub fn record_to(&mut self, path: &Path, flush_each_step: bool) -> Result<(), RecordingError> {
+        let record = &self.context.record;
+        let run = RunMessage {
+            timestamp: Timestamp::of(0.0),
+            task: record.task.clone(),
+            cell: record.cell.clone(),
+            seed: record.seed,
+            target: self.plan.target,
+            tolerance: self.plan.tolerance,
+            estimator: self.plan.estimator,
+            pitch_mm: self.plan.fit.pitch_mm,
+            contact_threshold_v: self.plan.fit.contact_threshold_v,
+            bias_frames: self.plan.bias_frames,
         };
-        self.context.now_s = self.cell.clock.now_s();
-        self.machine.handle_with_context(&event, &mut self.context);
-        true
+        self.recording = Some(Recording {
+            recorder: Recorder::create(path, &run)?,
+            transitions: 0,
+            grasps: 0,
+            flush_each_step,
+        });
+        Ok(())
     }
 
-    /// Steps until the run is over.
-    pub fn run_to_end(&mut self) {
-        while self.step() {}
+    /// Handles one event: `Start` when idle, else the answer to the pending
+    /// command. Returns `Ok(false)` once there is nothing left to do.
+    ///
+    /// A recording that cannot be written is an error, returned once: the
+    /// recorder is dropped (what it flushed stays readable) and the run
+    /// goes on unrecorded.
+    pub fn step(&mut self) -> Result<bool, RecordingError> {
+        let state = self.machine.state().name();
+        let (event, command) = match self.context.command.take() {
+            Some(command) => {
+                tracing::debug!(?command, state, "executing");
+                (execute(&mut self.cell, &command), Some(command))
+            }
+            None if matches!(self.machine.state(), State::Idle { .. }) => (Event::Start, None),
+            None => return Ok(false),
+        };
+        self.handle(state, command.as_ref(), &event)?;
+        Ok(true)
+    }
+
+    /// Asks the machine to stop: it goes to `fault`, whose command makes
+    /// the cell safe; the pending command is dropped unexecuted. Returns
+    /// `false` (and changes nothing) if there is no run to abort: not
+    /// started yet, or over.
+    pub fn abort(&mut self) -> Result<bool, RecordingError> {
+        let state = self.machine.state();
+        if matches!(state, State::Idle { .. }) || state.is_final() {
+            return Ok(false);
+        }
+        let state = state.name();
+        self.context.command = None;
+        self.handle(state, None, &Event::Abort)?;
+        Ok(true)
+    }
+
+    fn handle(
+        &mut self,
+        state: &'static str,
+        command: Option<&Command>,
+        event: &Event,
+    ) -> Result<(), RecordingError> {
+        self.context.now_s = self.cell.clock.now_s();
+        self.machine.handle_with_context(event, &mut self.context);
+        let result = self.write_recording(state, command, event);
+        if result.is_err() {
+            self.recording = None;
+        }
+        result
+    }
+
+    fn write_recording(
+        &mut self,
+        state: &str,
+        command: Option<&Command>,
+        event: &Event,
+    ) -> Result<(), RecordingError> {
+        let Some(recording) = &mut self.recording else {
+            return Ok(());
+        };
+        let recorder = &mut recording.recorder;
+        let now_s = self.context.now_s;
+        match command {
+            Some(
+                Command::MoveTo { base_from_tcp, .. }
+                | Command::Grasp { base_from_tcp, .. }
+                | Command::Regrasp { base_from_tcp, .. },
+            ) => {
+                recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
+            }
+            _ => {}
+        }
+        if let Event::Tactile { frames, .. } = event {
+            recorder.tactile_frames(state, frames)?;
+        }
+        let record = &self.context.record;
+        for grasp in &record.grasps[recording.grasps..] {
+            recorder.grasp(grasp)?;
+        }
+        recording.grasps = record.grasps.len();
+        for transition in &record.transitions[recording.transitions..] {
+            recorder.transition(transition)?;
+        }
+        let new_transitions = recording.transitions < record.transitions.len();
+        recording.transitions = record.transitions.len();
+        if new_transitions && self.machine.state().is_final() {
+            recorder.outcome(record, now_s)?;
+        }
+        if recording.flush_each_step {
+            recorder.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Finishes the recording, if there is one, and returns its path.
+    pub fn finish_recording(&mut self) -> Result<Option<PathBuf>, RecordingError> {
+        self.recording
+            .take()
+            .map(|recording| recording.recorder.finish())
+            .transpose()
+    }
+
+    /// Steps until the run is over. A recording error ends the recording,
+    /// not the run; the first one is returned.
+    pub fn run_to_end(&mut self) -> Result<(), RecordingError> {
+        let mut first_error = None;
+        loop {
+            match self.step() {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(error) => {
+                    first_error.get_or_insert(error);
+                }
+            }
+        }
+        first_error.map_or(Ok(()), Err)
     }
 
     pub fn state(&self) -> &State {
         self.machine.state()
     }
 
+    /// The command the machine waits to have carried out, if any.
+    pub fn pending_command(&self) -> Option<&Command> {
+        self.context.command.as_ref()
+    }
+
     pub fn record(&self) -> &RunRecord {
         &self.context.record
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// Replaces the plan between two steps. The pending command was given
+    /// with the old one; every later command and judgement uses `plan`.
+    pub fn set_plan(&mut self, plan: Plan) {
+        self.context.record.target = plan.target;
+        self.context.record.tolerance = plan.tolerance;
+        // SAFETY: statig marks `inner_mut` unsafe only because a change may
+        // break the machine's own invariants; the plan is read by entry
+        // actions and handlers alone, and the state is left as it is.
+        unsafe { self.machine.inner_mut() }.set_plan(plan.clone());
+        self.plan = plan;
+    }
+
+    /// Where the arm's TCP is now, asked of the arm.
+    pub fn base_from_tcp(&mut self) -> Result<Isometry3<f64>, DeviceError> {
+        self.cell.arm.base_from_tcp()
+    }
+
+    /// The cell's clock.
+    pub fn now_s(&self) -> f64 {
+        self.cell.clock.now_s()
+    }
+
+    pub fn cell_name(&self) -> &str {
+        &self.cell.name
     }
 
     pub fn into_record(self) -> RunRecord {

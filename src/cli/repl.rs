@@ -1,0 +1,826 @@
+//! `cablecell repl [TASK]`: step a task on a cell, look at what the
+//! sensors see, change a parameter, go on.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use cablecell::hw::DeviceError;
+use cablecell::orchestrator::breakpoint::RunValues;
+use cablecell::orchestrator::driver::{Driver, Mode, Stop};
+use cablecell::orchestrator::params::TaskParams;
+use cablecell::orchestrator::{Command, Plan, Runner, State};
+use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS, TactileMap};
+use cablecell::task::{CellFile, load_cell};
+use rustyline::completion::{Completer, FilenameCompleter, Pair};
+use rustyline::error::ReadlineError;
+use rustyline::highlight::Highlighter;
+use rustyline::hint::Hinter;
+use rustyline::history::FileHistory;
+use rustyline::validate::Validator;
+use rustyline::{Editor, Helper};
+
+use super::Status;
+use super::run::{
+    Commentary, RecordArgs, finish_recording, print_outcome, print_transition, start_recording,
+};
+
+/// The commands, their arguments and what they do, for `help` and
+/// completion.
+const COMMANDS: [(&str, &str, &str); 16] = [
+    ("load", "TASK", "load a task file and start a new run of it"),
+    (
+        "reset",
+        "",
+        "start the task again from idle (same seed, same parameters)",
+    ),
+    ("step", "", "run until the next state transition"),
+    (
+        "continue",
+        "",
+        "run until a breakpoint, the end, or Ctrl-C (pauses at the next safe point)",
+    ),
+    (
+        "pause",
+        "",
+        "Ctrl-C pauses a running `continue`; between commands the run is already paused",
+    ),
+    (
+        "abort",
+        "",
+        "stop the run: the cell is made safe (arm stopped, jaws opened)",
+    ),
+    (
+        "break",
+        "STATE [if EXPR]",
+        "stop on entering STATE, if EXPR holds (e.g. abs(n_mm) > 2)",
+    ),
+    ("breaks", "", "list the breakpoints"),
+    ("delete", "N", "delete breakpoint N"),
+    (
+        "state",
+        "",
+        "the current state, the pending command, the last transitions",
+    ),
+    (
+        "show",
+        "tactile|pose|params",
+        "the last tactile map, the arm's pose, the task's parameters",
+    ),
+    (
+        "set",
+        "PARAM VALUE",
+        "change a task parameter, checked like the task file",
+    ),
+    (
+        "values",
+        "",
+        "the run's values a breakpoint condition can use",
+    ),
+    ("help", "", "this list"),
+    ("quit", "", "leave (Ctrl-D too)"),
+    ("exit", "", "same as quit"),
+];
+
+const SHOW_TOPICS: [&str; 3] = ["tactile", "pose", "params"];
+
+/// A REPL session: the cell, the loaded task and its run.
+struct Session {
+    cell_path: PathBuf,
+    cell: CellFile,
+    seed: Option<u64>,
+    record: RecordArgs,
+    pace: Option<f64>,
+    /// Runs recorded so far, to number the files of an explicit `--record`.
+    runs: usize,
+    task: Option<Loaded>,
+    /// Set by Ctrl-C while a task runs.
+    pause: Arc<AtomicBool>,
+}
+
+struct Loaded {
+    params: TaskParams,
+    seed: u64,
+    driver: Driver,
+    commentary: Commentary,
+}
+
+pub fn repl(
+    task: Option<&Path>,
+    cell_path: &Path,
+    seed: Option<u64>,
+    record: RecordArgs,
+    pace: f64,
+) -> Status {
+    let cell = match load_cell(cell_path) {
+        Ok(cell) => cell,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    let pause = Arc::new(AtomicBool::new(false));
+    let mut session = Session {
+        cell_path: cell_path.to_owned(),
+        cell,
+        seed,
+        record,
+        pace: (pace > 0.0).then_some(pace),
+        runs: 0,
+        task: None,
+        pause,
+    };
+    if let Some(task) = task {
+        if let Err(message) = session.load(task) {
+            eprintln!("error: {message}");
+            return Status::BadInput;
+        }
+    }
+    let mut editor = match Editor::<ReplHelper, FileHistory>::new() {
+        Ok(editor) => editor,
+        Err(error) => {
+            eprintln!("error: cannot open the terminal: {error}");
+            return Status::BadInput;
+        }
+    };
+    editor.set_helper(Some(ReplHelper::new(&session)));
+    // After the editor, which takes SIGINT for itself when it is made:
+    // while a line is read the terminal is raw and Ctrl-C arrives as a key;
+    // while a task runs it is a signal, and asks for a pause.
+    let flag = session.pause.clone();
+    if let Err(error) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
+        eprintln!("warning: Ctrl-C cannot pause a run ({error}); it will stop the program");
+    }
+    let history = history_path();
+    // A missing history file is the first session's normal case.
+    let _ = editor.load_history(&history);
+    println!(
+        "cablecell repl on {} ({}): `help` lists the commands",
+        session.cell.cell.name,
+        session.cell_path.display()
+    );
+    loop {
+        let prompt = match &session.task {
+            Some(loaded) => format!(
+                "{}:{}> ",
+                loaded.params.task().task.name,
+                loaded.driver.runner.state().name()
+            ),
+            None => "cablecell> ".to_owned(),
+        };
+        let line = match editor.readline(&prompt) {
+            Ok(line) => line,
+            Err(ReadlineError::Interrupted) => {
+                println!("(nothing is running; `quit` leaves)");
+                continue;
+            }
+            Err(ReadlineError::Eof) => break,
+            Err(error) => {
+                eprintln!("error: cannot read the terminal: {error}");
+                break;
+            }
+        };
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let _ = editor.add_history_entry(line);
+        if let Err(error) = editor.save_history(&history) {
+            tracing::debug!("history not saved to {}: {error}", history.display());
+        }
+        match session.command(line) {
+            Ok(Flow::Go) => {}
+            Ok(Flow::Quit) => break,
+            Err(message) => println!("cannot: {message}"),
+        }
+        if let Some(helper) = editor.helper_mut() {
+            *helper = ReplHelper::new(&session);
+        }
+    }
+    session.end_run();
+    Status::Success
+}
+
+/// `$HOME/.cablecell_history`, else in the current folder.
+fn history_path() -> PathBuf {
+    std::env::var_os("HOME")
+        .map_or_else(PathBuf::new, PathBuf::from)
+        .join(".cablecell_history")
+}
+
+enum Flow {
+    Go,
+    Quit,
+}
+
+impl Session {
+    fn load(&mut self, path: &Path) -> Result<(), String> {
+        let params = TaskParams::load(path).map_err(|e| e.to_string())?;
+        let seed = self
+            .seed
+            .or(params.task().task.seed)
+            .unwrap_or_else(rand::random);
+        println!(
+            "loaded task {} from {} (seed {seed})",
+            params.task().task.name,
+            path.display()
+        );
+        self.start(params, seed)
+    }
+
+    /// Ends the current run, if any, and starts a new one from idle; the
+    /// breakpoints carry over.
+    fn start(&mut self, params: TaskParams, seed: u64) -> Result<(), String> {
+        let breakpoints = self.end_run().unwrap_or_default();
+        let runner = self
+            .new_runner(&params, seed)
+            .map_err(|error| format!("the cell cannot start: {error}"))?;
+        let mut driver = Driver::new(runner);
+        driver.breakpoints = breakpoints;
+        driver.pace = self.pace;
+        self.task = Some(Loaded {
+            params,
+            seed,
+            driver,
+            commentary: Commentary::default(),
+        });
+        Ok(())
+    }
+
+    fn new_runner(&mut self, params: &TaskParams, seed: u64) -> Result<Runner, DeviceError> {
+        let mut runner = Runner::for_task(params.task(), &self.cell, seed)?;
+        self.runs += 1;
+        let path = self
+            .record
+            .path(&params.task().task.name, seed)
+            .map(|path| numbered(&path, self.runs));
+        start_recording(&mut runner, path.as_deref());
+        Ok(runner)
+    }
+
+    /// Finishes the current run's recording; returns its breakpoints.
+    fn end_run(&mut self) -> Option<cablecell::orchestrator::breakpoint::Breakpoints> {
+        let mut loaded = self.task.take()?;
+        finish_recording(&mut loaded.driver.runner);
+        Some(loaded.driver.breakpoints)
+    }
+
+    fn loaded(&mut self) -> Result<&mut Loaded, String> {
+        self.task
+            .as_mut()
+            .ok_or_else(|| "no task loaded: `load TASK` first".to_owned())
+    }
+
+    fn command(&mut self, line: &str) -> Result<Flow, String> {
+        let mut words = line.split_whitespace();
+        let name = words.next().unwrap_or_default();
+        let args: Vec<&str> = words.collect();
+        let no_args = |args: &[&str]| match args.first() {
+            Some(extra) => Err(format!("`{name}` takes no argument (found `{extra}`)")),
+            None => Ok(()),
+        };
+        match name {
+            "help" => {
+                no_args(&args)?;
+                print_help();
+            }
+            "quit" | "exit" => {
+                no_args(&args)?;
+                return Ok(Flow::Quit);
+            }
+            "load" => match args.as_slice() {
+                [path] => self.load(Path::new(path))?,
+                _ => return Err("usage: load TASK".into()),
+            },
+            "reset" => {
+                no_args(&args)?;
+                let (params, seed) = {
+                    let loaded = self.loaded()?;
+                    (loaded.params.clone(), loaded.seed)
+                };
+                self.start(params, seed)?;
+                println!("reset: idle (seed {seed})");
+            }
+            "step" | "s" => {
+                no_args(&args)?;
+                self.advance(Mode::Step)?;
+            }
+            "continue" | "c" => {
+                no_args(&args)?;
+                self.advance(Mode::Continue)?;
+            }
+            "pause" => {
+                no_args(&args)?;
+                self.loaded()?;
+                return Err(
+                    "nothing is running: the run is paused between commands already; Ctrl-C pauses a `continue`".into(),
+                );
+            }
+            "abort" => {
+                no_args(&args)?;
+                self.abort()?;
+            }
+            "break" | "b" => self.add_break(&args)?,
+            "breaks" => {
+                no_args(&args)?;
+                let loaded = self.loaded()?;
+                if loaded.driver.breakpoints.iter().next().is_none() {
+                    println!("no breakpoints");
+                }
+                for breakpoint in loaded.driver.breakpoints.iter() {
+                    println!("{breakpoint}");
+                }
+            }
+            "delete" => match args.as_slice() {
+                [id] => {
+                    let id: usize = id
+                        .parse()
+                        .map_err(|_| format!("`{id}` is not a breakpoint number"))?;
+                    if !self.loaded()?.driver.breakpoints.delete(id) {
+                        return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
+                    }
+                    println!("deleted breakpoint {id}");
+                }
+                _ => return Err("usage: delete N".into()),
+            },
+            "state" => {
+                no_args(&args)?;
+                show_state(self.loaded()?);
+            }
+            "show" => match args.as_slice() {
+                ["tactile"] => show_tactile(self.loaded()?)?,
+                ["pose"] => show_pose(self.loaded()?)?,
+                ["params"] => {
+                    for (name, value) in self.loaded()?.params.list() {
+                        println!("{name} = {value}");
+                    }
+                }
+                _ => return Err(format!("usage: show {}", SHOW_TOPICS.join("|"))),
+            },
+            "set" => match args.as_slice() {
+                [param, value @ ..] if !value.is_empty() => {
+                    let value = value.join(" ");
+                    let cell = self.cell.clone();
+                    let loaded = self.loaded()?;
+                    loaded
+                        .params
+                        .set(param, &value)
+                        .map_err(|e| e.to_string())?;
+                    loaded
+                        .driver
+                        .runner
+                        .set_plan(Plan::new(loaded.params.task(), &cell));
+                    println!("{param} = {value} (from the next command on)");
+                }
+                _ => return Err("usage: set PARAM VALUE (`show params` lists them)".into()),
+            },
+            "values" => {
+                no_args(&args)?;
+                let values = RunValues::of(self.loaded()?.driver.runner.record());
+                for name in RunValues::NAMES {
+                    let value = values
+                        .get(name)
+                        .map_or("(none yet)".to_owned(), |v| format!("{v:.4}"));
+                    println!("{name:>22} = {value:<12} {}", RunValues::describe(name));
+                }
+            }
+            other => return Err(format!("unknown command `{other}` (`help` lists them)")),
+        }
+        Ok(Flow::Go)
+    }
+
+    fn add_break(&mut self, args: &[&str]) -> Result<(), String> {
+        let (state, condition) = match args {
+            [state] => (*state, None),
+            [state, "if", condition @ ..] if !condition.is_empty() => {
+                (*state, Some(condition.join(" ")))
+            }
+            _ => return Err("usage: break STATE [if EXPR]".into()),
+        };
+        let loaded = self.loaded()?;
+        let id = loaded
+            .driver
+            .breakpoints
+            .add(state, condition.as_deref())
+            .map_err(|e| e.to_string())?;
+        match condition {
+            Some(condition) => println!("breakpoint {id}: {state} if {condition}"),
+            None => println!("breakpoint {id}: {state}"),
+        }
+        Ok(())
+    }
+
+    fn advance(&mut self, mode: Mode) -> Result<(), String> {
+        let pause = self.pause.clone();
+        let loaded = self.loaded()?;
+        if run_over(&loaded.driver.runner) {
+            return Err(format!(
+                "the run is over ({}): `reset` starts it again",
+                loaded.driver.runner.state().name()
+            ));
+        }
+        // A Ctrl-C pressed while nothing ran is not a request to pause this.
+        pause.store(false, Ordering::SeqCst);
+        let commentary = &mut loaded.commentary;
+        let stop = loaded
+            .driver
+            .advance(mode, &pause, |runner| commentary.print_new(runner.record()));
+        let stop = stop.map_err(|e| format!("{e}; the run goes on unrecorded"))?;
+        let record = loaded.driver.runner.record();
+        let runner = &loaded.driver.runner;
+        match stop {
+            Stop::Transition { to, .. } if !run_over(runner) => {
+                println!("in {to}{}", next_command(runner));
+            }
+            Stop::Transition { .. } | Stop::Finished { .. } => {}
+            Stop::Breakpoint { id, state } => {
+                let breakpoint = loaded.driver.breakpoints.iter().find(|b| b.id == id);
+                let condition = breakpoint
+                    .and_then(|b| b.condition.as_ref())
+                    .map(|c| format!(" (if {})", c.text()))
+                    .unwrap_or_default();
+                println!(
+                    "breakpoint {id} hit on entering {state}{condition}{}",
+                    next_command(runner)
+                );
+            }
+            Stop::Paused { state } => println!("paused in {state}{}", next_command(runner)),
+        }
+        if run_over(runner) {
+            println!("run over in {}", runner.state().name());
+            print_outcome(record);
+        }
+        Ok(())
+    }
+
+    fn abort(&mut self) -> Result<(), String> {
+        let pause = self.pause.clone();
+        let loaded = self.loaded()?;
+        match loaded.driver.runner.abort() {
+            Ok(true) => {}
+            Ok(false) if loaded.driver.runner.state().is_final() => {
+                return Err(format!(
+                    "the run is over ({})",
+                    loaded.driver.runner.state().name()
+                ));
+            }
+            Ok(false) => return Err("the run has not started: nothing to abort".into()),
+            Err(error) => println!("warning: {error}; the run goes on unrecorded"),
+        }
+        // Carry out the safe stop now, whatever the breakpoints say.
+        let breakpoints = std::mem::take(&mut loaded.driver.breakpoints);
+        pause.store(false, Ordering::SeqCst);
+        let commentary = &mut loaded.commentary;
+        let result = loaded.driver.advance(Mode::Continue, &pause, |runner| {
+            commentary.print_new(runner.record())
+        });
+        loaded.driver.breakpoints = breakpoints;
+        if let Err(error) = result {
+            println!("warning: {error}; the run goes on unrecorded");
+        }
+        print_outcome(loaded.driver.runner.record());
+        Ok(())
+    }
+}
+
+/// `path` for the first run of a session, `path-N.mcap` for the N-th.
+fn numbered(path: &Path, run: usize) -> PathBuf {
+    if run <= 1 {
+        return path.to_owned();
+    }
+    let stem = path
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let extension = path
+        .extension()
+        .map_or_else(String::new, |e| format!(".{}", e.to_string_lossy()));
+    path.with_file_name(format!("{stem}-{run}{extension}"))
+}
+
+/// In a final state with nothing left to carry out.
+fn run_over(runner: &Runner) -> bool {
+    runner.state().is_final() && runner.pending_command().is_none()
+}
+
+fn next_command(runner: &Runner) -> String {
+    runner
+        .pending_command()
+        .map(|command| format!("; next: {}", command_name(command)))
+        .unwrap_or_default()
+}
+
+fn command_name(command: &Command) -> &'static str {
+    match command {
+        Command::Prepare { .. } => "prepare (reference and open the gripper, read the bias frames)",
+        Command::Detect => "detect the cable",
+        Command::MoveTo { .. } => "move to the standoff pose",
+        Command::Grasp { .. } => "descend and grasp",
+        Command::ReadTactile { .. } => "read the tactile frames",
+        Command::Regrasp { .. } => "release, move by T_corr, grasp again",
+        Command::SafeStop { .. } => "safe stop (stop the arm, open the jaws)",
+    }
+}
+
+fn print_help() {
+    println!("commands:");
+    for (name, args, what) in COMMANDS {
+        println!("  {:<28} {what}", format!("{name} {args}"));
+    }
+    println!("(step, continue and break also as s, c and b)");
+    println!("states: {}", State::NAMES.join(", "));
+    println!("values for `break STATE if EXPR` (`values` shows them now):");
+    println!("  {}", RunValues::NAMES.join(", "));
+    println!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
+}
+
+fn show_state(loaded: &Loaded) {
+    let runner = &loaded.driver.runner;
+    let record = runner.record();
+    println!(
+        "state {} at {:.3} s{}",
+        runner.state().name(),
+        runner.now_s(),
+        next_command(runner)
+    );
+    let first = record.transitions.len().saturating_sub(8);
+    if first > 0 {
+        println!("  ({first} earlier transitions)");
+    }
+    for (i, t) in record.transitions.iter().enumerate().skip(first) {
+        print_transition(record, i, t);
+    }
+    if let Some(entered) = record.transitions.last() {
+        println!(
+            "  in {} for {:.3} s",
+            entered.to,
+            runner.now_s() - entered.t_s
+        );
+    }
+    if record.outcome.is_some() {
+        print_outcome(record);
+    }
+}
+
+fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
+    let runner = &mut loaded.driver.runner;
+    let base_from_tcp = runner
+        .base_from_tcp()
+        .map_err(|e| format!("the arm did not answer: {e}"))?;
+    println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
+    if let Some(grasp) = runner.record().grasps.last() {
+        println!(
+            "at the latest grasp ({}): {}",
+            attempt_name(grasp.attempt),
+            pose_text(&grasp.base_from_tcp)
+        );
+    }
+    Ok(())
+}
+
+fn pose_text(pose: &nalgebra::Isometry3<f64>) -> String {
+    let t = pose.translation.vector;
+    let (roll, pitch, yaw) = pose.rotation.euler_angles();
+    format!(
+        "x {:+9.3} y {:+9.3} z {:+9.3} mm  roll {:+8.3} pitch {:+8.3} yaw {:+8.3} deg",
+        t.x,
+        t.y,
+        t.z,
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees()
+    )
+}
+
+fn attempt_name(attempt: u32) -> String {
+    match attempt {
+        0 => "trial grasp".into(),
+        k => format!("regrasp {k}"),
+    }
+}
+
+/// Canvas cells per taxel: terminal cells are about twice as tall as wide.
+const CELL_COLS: usize = 8;
+const CELL_ROWS: usize = 4;
+const SHADES: [char; 5] = [' ', '░', '▒', '▓', '█'];
+
+fn show_tactile(loaded: &Loaded) -> Result<(), String> {
+    let record = loaded.driver.runner.record();
+    let grasp = record
+        .grasps
+        .last()
+        .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
+    let pitch_mm = loaded.driver.runner.plan().fit.pitch_mm;
+    let line = grasp.fit.as_ref().map(Estimate::line);
+    let centroids: Vec<(f64, f64)> = match &grasp.fit {
+        Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
+        _ => Vec::new(),
+    };
+    println!(
+        "{} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
+        attempt_name(grasp.attempt),
+        grasp.t_s,
+        grasp.map.peak_dv_v()
+    );
+    for row in draw_map(&grasp.map, pitch_mm, line, &centroids) {
+        println!("  |{row}|");
+    }
+    println!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
+    for row in 0..TAXEL_ROWS {
+        let values: Vec<String> = (0..TAXEL_COLS)
+            .map(|col| format!("{:7.1}", grasp.map.dv_v[row][col] * 1000.0))
+            .collect();
+        println!("  {}", values.join(""));
+    }
+    match (&grasp.fit, line) {
+        (Some(fit), Some(line)) => {
+            let name = match fit {
+                Estimate::Centroids(_) => "centroids",
+                Estimate::Ridge(_) => "ridge",
+                Estimate::Oracle { .. } => "oracle",
+            };
+            println!(
+                "fitted line ({name}): n {:+.3} mm, α {:+.4} rad",
+                line.offset_mm, line.alpha_rad
+            );
+        }
+        _ => println!("no fitted line: the fit failed"),
+    }
+    if let Some(truth) = &grasp.truth {
+        println!(
+            "true line:            n {:+.3} mm, α {:+.4} rad",
+            truth.line.offset_mm, truth.line.alpha_rad
+        );
+    }
+    Ok(())
+}
+
+/// The map drawn on a character canvas in the sensor frame (x right, y up),
+/// with the line and the centroids over it.
+fn draw_map(
+    map: &TactileMap,
+    pitch_mm: f64,
+    line: Option<cablecell::geometry::LineInSensor>,
+    centroids: &[(f64, f64)],
+) -> Vec<String> {
+    let (width, height) = (TAXEL_COLS * CELL_COLS, TAXEL_ROWS * CELL_ROWS);
+    let peak = map.peak_dv_v().max(1e-9);
+    let x_mm = |cx: usize| ((cx as f64 + 0.5) / CELL_COLS as f64 - 2.5) * pitch_mm;
+    let y_mm = |cy: usize| (2.5 - (cy as f64 + 0.5) / CELL_ROWS as f64) * pitch_mm;
+    let mut canvas: Vec<Vec<char>> = (0..height)
+        .map(|cy| {
+            (0..width)
+                .map(|cx| {
+                    let dv = map.dv_v[cy / CELL_ROWS][cx / CELL_COLS].max(0.0);
+                    let level = ((dv / peak) * (SHADES.len() - 1) as f64).round() as usize;
+                    SHADES[level.min(SHADES.len() - 1)]
+                })
+                .collect()
+        })
+        .collect();
+    if let Some(line) = line {
+        let (sin, cos) = line.alpha_rad.sin_cos();
+        // A canvas cell is marked if the line crosses it: its centre lies
+        // within the cell's half extent along the line's normal.
+        let (cell_w_mm, cell_h_mm) = (pitch_mm / CELL_COLS as f64, pitch_mm / CELL_ROWS as f64);
+        let half_extent_mm = 0.5 * (sin.abs() * cell_w_mm + cos.abs() * cell_h_mm);
+        for (cy, row) in canvas.iter_mut().enumerate() {
+            for (cx, cell) in row.iter_mut().enumerate() {
+                let distance_mm = -sin * x_mm(cx) + cos * y_mm(cy) - line.offset_mm;
+                if distance_mm.abs() <= half_extent_mm {
+                    *cell = '*';
+                }
+            }
+        }
+    }
+    for &(x, y) in centroids {
+        let cx = ((x / pitch_mm + 2.5) * CELL_COLS as f64).floor();
+        let cy = ((2.5 - y / pitch_mm) * CELL_ROWS as f64).floor();
+        if (0.0..width as f64).contains(&cx) && (0.0..height as f64).contains(&cy) {
+            canvas[cy as usize][cx as usize] = 'o';
+        }
+    }
+    canvas
+        .into_iter()
+        .map(|row| row.into_iter().collect())
+        .collect()
+}
+
+/// Completion of commands, states, parameters, `show` topics, value
+/// names in conditions, and file names for `load`.
+struct ReplHelper {
+    params: Vec<String>,
+    files: FilenameCompleter,
+}
+
+impl ReplHelper {
+    fn new(session: &Session) -> Self {
+        Self {
+            params: session
+                .task
+                .as_ref()
+                .map(|t| t.params.names())
+                .unwrap_or_default(),
+            files: FilenameCompleter::new(),
+        }
+    }
+}
+
+impl Completer for ReplHelper {
+    type Candidate = Pair;
+
+    fn complete(
+        &self,
+        line: &str,
+        pos: usize,
+        ctx: &rustyline::Context<'_>,
+    ) -> rustyline::Result<(usize, Vec<Pair>)> {
+        let before = &line[..pos];
+        let start = before.rfind(char::is_whitespace).map_or(0, |i| i + 1);
+        let word = &before[start..];
+        let words: Vec<&str> = before[..start].split_whitespace().collect();
+        let candidates: Vec<String> = match words.as_slice() {
+            [] => COMMANDS
+                .iter()
+                .map(|(name, _, _)| (*name).to_owned())
+                .collect(),
+            ["load"] => return self.files.complete(line, pos, ctx),
+            ["break" | "b"] => State::NAMES.iter().map(|s| (*s).to_owned()).collect(),
+            ["break" | "b", _] => vec!["if".to_owned()],
+            ["break" | "b", _, "if", ..] => RunValues::NAMES
+                .iter()
+                .map(|s| (*s).to_owned())
+                .chain(["abs(", "and", "or", "not"].map(str::to_owned))
+                .collect(),
+            ["show"] => SHOW_TOPICS.iter().map(|s| (*s).to_owned()).collect(),
+            ["set"] => self.params.clone(),
+            ["help"] => COMMANDS
+                .iter()
+                .map(|(name, _, _)| (*name).to_owned())
+                .collect(),
+            _ => Vec::new(),
+        };
+        let pairs = candidates
+            .into_iter()
+            .filter(|c| c.starts_with(word))
+            .map(|c| Pair {
+                // A finished word is followed by a space, ready for the next.
+                replacement: if c.ends_with('(') {
+                    c.clone()
+                } else {
+                    format!("{c} ")
+                },
+                display: c,
+            })
+            .collect();
+        Ok((start, pairs))
+    }
+}
+
+impl Hinter for ReplHelper {
+    type Hint = String;
+}
+
+impl Highlighter for ReplHelper {}
+
+impl Validator for ReplHelper {}
+
+impl Helper for ReplHelper {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_horizontal_line_near_the_middle_marks_the_row_it_crosses() {
+        let map = TactileMap::from_fn(|row, _| if row == 2 { 0.5 } else { 0.0 });
+        let line = cablecell::geometry::LineInSensor::new(0.0, 0.1);
+        let rows = draw_map(&map, 3.55, Some(line), &[(0.0, 0.0)]);
+        assert_eq!(rows.len(), TAXEL_ROWS * CELL_ROWS);
+        let marked: Vec<usize> = rows
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.contains('*'))
+            .map(|(i, _)| i)
+            .collect();
+        assert_eq!(marked, [9]);
+        assert_eq!(
+            rows[9].chars().filter(|c| *c == '*').count(),
+            TAXEL_COLS * CELL_COLS
+        );
+        assert_eq!(rows[10].chars().nth(20), Some('o'));
+        assert!(rows[0].chars().all(|c| c == ' '));
+        assert!(rows[8].contains('█'));
+    }
+
+    #[test]
+    fn explicit_recording_paths_are_numbered_after_the_first_run() {
+        assert_eq!(
+            numbered(Path::new("runs/a.mcap"), 1),
+            Path::new("runs/a.mcap")
+        );
+        assert_eq!(
+            numbered(Path::new("runs/a.mcap"), 3),
+            Path::new("runs/a-3.mcap")
+        );
+    }
+}

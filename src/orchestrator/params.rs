@@ -1,0 +1,207 @@
+//! A task's parameters as the REPL's `show params` and `set` see them: the
+//! task file's values by dotted name (`tolerance.n_mm`), each change
+//! checked exactly as the task file is, so a value the file would refuse
+//! is refused with the same message.
+
+use std::path::{Path, PathBuf};
+
+use crate::task::TaskFile;
+use crate::task::load::{ConfigError, parse, read};
+
+/// Why a parameter could not be set.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParamError {
+    /// No parameter of the task has this name: use one of `known`.
+    #[error("unknown parameter `{name}`; parameters: {}", known.join(", "))]
+    Unknown { name: String, known: Vec<String> },
+    /// The value is not a TOML value, or the task file would refuse it:
+    /// `message` says what is expected.
+    #[error("{name}: {message}")]
+    Invalid { name: String, message: String },
+}
+
+/// A task file's values, changeable one at a time.
+#[derive(Debug, Clone)]
+pub struct TaskParams {
+    path: PathBuf,
+    table: toml::Table,
+    task: TaskFile,
+}
+
+impl TaskParams {
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = read(path)?;
+        let task: TaskFile = parse(path, &text)?;
+        let mut table: toml::Table = parse(path, &text)?;
+        // Optional values with a default are parameters too.
+        if let Some(toml::Value::Table(regrasp)) = table.get_mut("regrasp") {
+            regrasp.entry("correction_gain").or_insert_with(|| {
+                let gain: toml::Table = [
+                    ("n".to_owned(), toml::Value::Float(1.0)),
+                    ("alpha".to_owned(), toml::Value::Float(1.0)),
+                ]
+                .into_iter()
+                .collect();
+                toml::Value::Table(gain)
+            });
+        }
+        Ok(Self {
+            path: path.to_owned(),
+            table,
+            task,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    pub fn task(&self) -> &TaskFile {
+        &self.task
+    }
+
+    /// Every parameter with its value, in file order (`[task]`, which
+    /// names the task, is not a parameter).
+    pub fn list(&self) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        for (key, value) in self.table.iter().filter(|(key, _)| *key != "task") {
+            leaves(key, value, &mut out);
+        }
+        out
+    }
+
+    pub fn names(&self) -> Vec<String> {
+        self.list().into_iter().map(|(name, _)| name).collect()
+    }
+
+    /// Sets `name` to `value` (TOML: `0.5`, `"ridge"`, or a bare word taken
+    /// as a string), if the task file would accept it.
+    pub fn set(&mut self, name: &str, value: &str) -> Result<(), ParamError> {
+        if !self.names().iter().any(|n| n == name) {
+            return Err(ParamError::Unknown {
+                name: name.to_owned(),
+                known: self.names(),
+            });
+        }
+        let invalid = |message: String| ParamError::Invalid {
+            name: name.to_owned(),
+            message,
+        };
+        let value = parse_value(value).map_err(invalid)?;
+        let mut table = self.table.clone();
+        let mut slot = &mut table;
+        let mut keys = name.split('.').peekable();
+        while let Some(key) = keys.next() {
+            if keys.peek().is_none() {
+                slot.insert(key.to_owned(), value.clone());
+                break;
+            }
+            match slot.get_mut(key) {
+                Some(toml::Value::Table(inner)) => slot = inner,
+                _ => return Err(invalid("not a value".into())),
+            }
+        }
+        let text = toml::to_string(&table).map_err(|e| invalid(e.to_string()))?;
+        let task = parse::<TaskFile>(&self.path, &text).map_err(|error| match error {
+            ConfigError::Invalid { message, .. } => invalid(message),
+            other => invalid(other.to_string()),
+        })?;
+        self.table = table;
+        self.task = task;
+        Ok(())
+    }
+}
+
+fn leaves(prefix: &str, value: &toml::Value, out: &mut Vec<(String, String)>) {
+    match value {
+        toml::Value::Table(table) => {
+            for (key, inner) in table {
+                leaves(&format!("{prefix}.{key}"), inner, out);
+            }
+        }
+        leaf => out.push((prefix.to_owned(), leaf.to_string())),
+    }
+}
+
+/// A TOML value; a bare word that is not one is taken as a string.
+fn parse_value(text: &str) -> Result<toml::Value, String> {
+    let parsed = |text: &str| {
+        format!("v = {text}")
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+    };
+    let bare_word = !text.is_empty() && text.chars().all(|c| c.is_alphanumeric() || c == '_');
+    parsed(text)
+        .or_else(|| bare_word.then(|| toml::Value::String(text.to_owned())))
+        .ok_or_else(|| format!("`{text}` is not a value (a number, true/false, or a word)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> TaskParams {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        TaskParams::load(&root.join("tasks/regrasp.toml")).unwrap()
+    }
+
+    #[test]
+    fn lists_every_value_of_the_file_and_defaults() {
+        let list = params().list();
+        assert!(list.contains(&("tolerance.n_mm".into(), "1.0".into())));
+        assert!(list.contains(&("tactile.estimator".into(), "\"centroids\"".into())));
+        assert!(list.contains(&("regrasp.correction_gain.n".into(), "1.0".into())));
+        assert!(!list.iter().any(|(name, _)| name.starts_with("task.")));
+    }
+
+    #[test]
+    fn a_good_value_changes_the_task() {
+        let mut p = params();
+        p.set("tolerance.n_mm", "0.25").unwrap();
+        p.set("tactile.estimator", "ridge").unwrap();
+        p.set("regrasp.max_regrasps", "4").unwrap();
+        p.set("regrasp.correction_gain.n", "1.2").unwrap();
+        let task = p.task();
+        assert_eq!(task.tolerance.n_mm, 0.25);
+        assert_eq!(
+            task.tactile.estimator,
+            crate::perception::tactile::Estimator::Ridge
+        );
+        assert_eq!(task.regrasp.max_regrasps, 4);
+        assert_eq!(task.regrasp.correction_gain.n, 1.2);
+    }
+
+    #[test]
+    fn a_bad_value_is_refused_as_the_file_would_and_changes_nothing() {
+        let mut p = params();
+        let error = p.set("tolerance.n_mm", "-1").unwrap_err();
+        assert_eq!(
+            error,
+            ParamError::Invalid {
+                name: "tolerance.n_mm".into(),
+                message: "expected a number > 0, found -1".into()
+            }
+        );
+        assert!(
+            p.set("tactile.estimator", "best")
+                .unwrap_err()
+                .to_string()
+                .contains("unknown variant")
+        );
+        assert!(matches!(
+            p.set("regrasp.max_regrasps", "1.5"),
+            Err(ParamError::Invalid { .. })
+        ));
+        assert!(matches!(
+            p.set("tolerance.n", "1"),
+            Err(ParamError::Unknown { .. })
+        ));
+        assert!(matches!(
+            p.set("tolerance", "1"),
+            Err(ParamError::Unknown { .. })
+        ));
+        assert_eq!(p.task().tolerance.n_mm, 1.0);
+    }
+}

@@ -1,0 +1,85 @@
+//! Reads a recording back, whole or cut short.
+
+use std::path::{Path, PathBuf};
+
+use mcap::read::Options;
+use serde::de::DeserializeOwned;
+
+use super::RecordingError;
+use super::schema::Topic;
+
+/// A recording's messages, in file order.
+#[derive(Debug, Clone)]
+pub struct Recording {
+    pub path: PathBuf,
+    pub messages: Vec<RecordedMessage>,
+    /// Why the file ends early (a run killed before it finished writing):
+    /// `None` for a complete file. The messages before the cut are kept.
+    pub truncated: Option<String>,
+}
+
+#[derive(Debug, Clone)]
+pub struct RecordedMessage {
+    pub topic: String,
+    pub log_time_ns: u64,
+    pub data: Vec<u8>,
+}
+
+impl Recording {
+    pub fn read(path: &Path) -> Result<Self, RecordingError> {
+        let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let complete = mcap::read::footer(&bytes).is_ok();
+        let stream = mcap::MessageStream::new_with_options(&bytes, Options::IgnoreEndMagic.into())
+            .map_err(RecordingError::mcap(path))?;
+        let mut messages = Vec::new();
+        let mut truncated = None;
+        for message in stream {
+            match message {
+                Ok(message) => messages.push(RecordedMessage {
+                    topic: message.channel.topic.clone(),
+                    log_time_ns: message.log_time,
+                    data: message.data.into_owned(),
+                }),
+                Err(error) => {
+                    truncated = Some(error.to_string());
+                    break;
+                }
+            }
+        }
+        if truncated.is_none() && !complete {
+            truncated = Some("the file ends without its summary and footer".into());
+        }
+        Ok(Self {
+            path: path.to_owned(),
+            messages,
+            truncated,
+        })
+    }
+
+    /// Messages on `topic`.
+    pub fn count(&self, topic: Topic) -> usize {
+        self.on(topic).count()
+    }
+
+    fn on(&self, topic: Topic) -> impl Iterator<Item = &RecordedMessage> {
+        self.messages
+            .iter()
+            .filter(move |m| m.topic == topic.name())
+    }
+
+    /// Every message on `topic`, decoded.
+    pub fn decode<T: DeserializeOwned>(&self, topic: Topic) -> Result<Vec<T>, RecordingError> {
+        self.on(topic)
+            .map(|m| {
+                serde_json::from_slice(&m.data).map_err(|source| RecordingError::Encode {
+                    path: self.path.clone(),
+                    topic: topic.name(),
+                    source,
+                })
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,121 @@
+//! A recorded run read back: its timeline, and its grasps fitted again
+//! from the recorded frames, with the recorded estimator or another one,
+//! so that estimators can be compared on the same inputs.
+
+use super::RecordingError;
+use super::read::Recording;
+use super::schema::{RunMessage, TactileFitMessage, TactileRawMessage, Topic, TransitionMessage};
+use crate::geometry::{LineInSensor, PoseError};
+use crate::perception::tactile::{BiasEstimator, Estimator, FitConfig, FitError, RawFrame};
+
+/// What a recording says happened.
+#[derive(Debug, Clone)]
+pub struct Replay {
+    pub run: RunMessage,
+    pub transitions: Vec<TransitionMessage>,
+    pub fits: Vec<TactileFitMessage>,
+    raw: Vec<TactileRawMessage>,
+}
+
+/// One recorded grasp fitted again.
+#[derive(Debug, Clone)]
+pub struct Refit {
+    pub attempt: u32,
+    pub estimator: Estimator,
+    /// The new estimate, or why there is none.
+    pub line: Result<LineInSensor, FitError>,
+    /// The recorded estimate.
+    pub recorded: Option<LineInSensor>,
+    /// Where the cable really lay (simulated cells).
+    pub truth: Option<LineInSensor>,
+    /// Frames averaged.
+    pub frames: usize,
+}
+
+impl Refit {
+    /// The new estimate against the truth.
+    pub fn error(&self) -> Option<PoseError> {
+        Some(self.line.as_ref().ok()?.error_to(&self.truth?))
+    }
+
+    /// The recorded estimate against the truth.
+    pub fn recorded_error(&self) -> Option<PoseError> {
+        Some(self.recorded?.error_to(&self.truth?))
+    }
+}
+
+impl Replay {
+    pub fn of(recording: &Recording) -> Result<Self, RecordingError> {
+        let run = recording
+            .decode::<RunMessage>(Topic::Run)?
+            .into_iter()
+            .next()
+            .ok_or_else(|| RecordingError::NotARun {
+                path: recording.path.clone(),
+            })?;
+        Ok(Self {
+            run,
+            transitions: recording.decode(Topic::State)?,
+            fits: recording.decode(Topic::TactileFit)?,
+            raw: recording.decode(Topic::TactileRaw)?,
+        })
+    }
+
+    /// Each recorded grasp fitted again with `estimator`, from the
+    /// recorded raw frames: the bias from the first `bias_frames` frames
+    /// (`prepare`'s), then the mean Δv of the frames read for that grasp.
+    /// Empty if the recording holds no complete bias; a grasp whose frames
+    /// are missing is left out.
+    pub fn refit(&self, estimator: Estimator) -> Vec<Refit> {
+        let mut bias = BiasEstimator::new(self.run.bias_frames);
+        let Some(bias) = self
+            .raw
+            .iter()
+            .filter(|m| m.state == "prepare")
+            .find_map(|m| bias.push(&m.counts))
+        else {
+            return Vec::new();
+        };
+        let config = FitConfig {
+            pitch_mm: self.run.pitch_mm,
+            contact_threshold_v: self.run.contact_threshold_v,
+        };
+        let mut after_s = f64::NEG_INFINITY;
+        self.fits
+            .iter()
+            .filter_map(|fit| {
+                let fit_s = seconds(fit.timestamp);
+                let frames: Vec<RawFrame> = self
+                    .raw
+                    .iter()
+                    .filter(|m| matches!(m.state.as_str(), "evaluate" | "verify"))
+                    .filter(|m| seconds(m.timestamp) > after_s && seconds(m.timestamp) <= fit_s)
+                    .map(|m| m.counts)
+                    .collect();
+                after_s = fit_s;
+                let map = bias.remove_mean(&frames)?;
+                let truth = fit
+                    .true_n_mm
+                    .zip(fit.true_alpha_rad)
+                    .map(|(n_mm, alpha_rad)| LineInSensor::new(alpha_rad, n_mm));
+                Some(Refit {
+                    attempt: fit.attempt,
+                    estimator,
+                    line: estimator
+                        .estimate(&map, &config, truth)
+                        .map(|estimate| estimate.line()),
+                    recorded: fit
+                        .n_mm
+                        .zip(fit.alpha_rad)
+                        .map(|(n_mm, alpha_rad)| LineInSensor::new(alpha_rad, n_mm)),
+                    truth,
+                    frames: frames.len(),
+                })
+            })
+            .collect()
+    }
+}
+
+fn seconds(timestamp: super::schema::Timestamp) -> f64 {
+    f64::from(timestamp.sec) + f64::from(timestamp.nsec) * 1e-9
+}

@@ -1,0 +1,231 @@
+//! Recordings: what a run writes, read back with the mcap crate; a file
+//! cut short; `cablecell replay`; a campaign's per-trial recordings.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::{Command, Output};
+
+mod common;
+
+use common::root;
+
+use cablecell::campaign::run::{Campaign, Overrides};
+use cablecell::orchestrator::{RunRecord, Runner};
+use cablecell::perception::tactile::Estimator;
+use cablecell::recording::replay::Replay;
+use cablecell::recording::{Recording, Topic};
+use cablecell::task::load_task;
+
+/// Runs the regrasp task with `seed`, recorded to `path`.
+fn recorded_run(path: &Path, seed: u64) -> RunRecord {
+    let task = load_task(&root().join("tasks/regrasp.toml")).unwrap();
+    let cell = common::sim_cell_with_oracle();
+    let mut runner = Runner::for_task(&task, &cell, seed).expect("a simulated cell builds");
+    runner.record_to(path, true).unwrap();
+    runner.run_to_end().unwrap();
+    assert_eq!(runner.finish_recording().unwrap().as_deref(), Some(path));
+    runner.into_record()
+}
+
+fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cablecell runs")
+}
+
+/// What the run record says each channel must hold.
+fn expected_counts(record: &RunRecord) -> BTreeMap<&'static str, u64> {
+    let (bias_frames, average_frames) = (50, 10); // tasks/regrasp.toml
+    let frames = (bias_frames + average_frames * record.grasps.len()) as u64;
+    let transitions = record.transitions.len() as u64;
+    let grasps = record.grasps.len() as u64;
+    // One target per approach, trial grasp and regrasp.
+    let targets = 2 + (grasps - 1);
+    BTreeMap::from([
+        ("/run", 1),
+        ("/state", transitions),
+        ("/log", transitions + 1),
+        ("/tactile/raw", frames),
+        ("/tactile/dv", frames - bias_frames as u64),
+        ("/tactile/fit", grasps),
+        ("/arm/grasp_pose", grasps),
+        ("/arm/target", targets),
+    ])
+}
+
+#[test]
+fn a_recording_holds_every_channel_with_foxglove_schemas_and_the_right_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    let record = recorded_run(&path, 3);
+    assert!(record.grasps.len() >= 2, "seed 3 regrasps once");
+    let bytes = std::fs::read(&path).unwrap();
+
+    // The summary, as any MCAP reader (Foxglove) sees it.
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let stats = summary.stats.expect("statistics");
+    let mut counts = BTreeMap::new();
+    for (id, channel) in &summary.channels {
+        assert_eq!(channel.message_encoding, "json");
+        let schema = channel.schema.as_ref().expect("a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        let expected_schema = match channel.topic.as_str() {
+            "/log" => "foxglove.Log",
+            "/arm/grasp_pose" | "/arm/target" => "foxglove.PoseInFrame",
+            _ => "cablecell.",
+        };
+        assert!(schema.name.starts_with(expected_schema), "{}", schema.name);
+        counts.insert(
+            channel.topic.as_str(),
+            stats.channel_message_counts.get(id).copied().unwrap_or(0),
+        );
+    }
+    assert_eq!(counts, expected_counts(&record));
+
+    // Every message is JSON, in time order, with a Foxglove timestamp.
+    let mut last_ns = 0;
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let message = message.unwrap();
+        let value: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
+        assert!(value["timestamp"]["sec"].is_u64(), "{value}");
+        assert!(message.log_time >= last_ns, "{}", message.channel.topic);
+        last_ns = message.log_time;
+    }
+    let states: Vec<serde_json::Value> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic == "/state")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect();
+    let recorded: Vec<&str> = states.iter().map(|s| s["to"].as_str().unwrap()).collect();
+    let expected: Vec<&str> = record.transitions.iter().map(|t| t.to).collect();
+    assert_eq!(recorded, expected);
+}
+
+#[test]
+fn a_truncated_recording_is_reported_and_what_it_holds_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    recorded_run(&path, 3);
+    let whole = Recording::read(&path).unwrap();
+    assert_eq!(whole.truncated, None);
+    let bytes = std::fs::read(&path).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    // Cut in the middle of a message.
+    std::fs::write(&cut, &bytes[..bytes.len() / 2 + 7]).unwrap();
+    let part = Recording::read(&cut).unwrap();
+    assert!(part.truncated.is_some());
+    assert!(!part.messages.is_empty() && part.messages.len() < whole.messages.len());
+    for (a, b) in part.messages.iter().zip(&whole.messages) {
+        assert_eq!(
+            (&a.topic, a.log_time_ns, &a.data),
+            (&b.topic, b.log_time_ns, &b.data)
+        );
+    }
+    // The timeline up to the cut is still there.
+    let replay = Replay::of(&part).unwrap();
+    assert!(!replay.transitions.is_empty());
+
+    let output = cablecell(&["replay", cut.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}");
+    assert!(stdout.starts_with("truncated recording ("), "{stdout}");
+    assert!(stdout.contains("idle → prepare"), "{stdout}");
+}
+
+#[test]
+fn replay_fits_the_recorded_frames_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    let record = recorded_run(&path, 3);
+    let replay = Replay::of(&Recording::read(&path).unwrap()).unwrap();
+    assert_eq!(replay.run.seed, 3);
+    assert_eq!(replay.run.estimator, Estimator::Centroids);
+    // The recorded estimator on the recorded frames gives the run's answers.
+    let again = replay.refit(Estimator::Centroids);
+    assert_eq!(again.len(), record.grasps.len());
+    for (refit, grasp) in again.iter().zip(&record.grasps) {
+        assert_eq!(refit.frames, 10);
+        let line = refit.line.as_ref().unwrap();
+        let expected = grasp.fit.as_ref().unwrap().line();
+        assert!((line.offset_mm - expected.offset_mm).abs() < 1e-9);
+        assert!((line.alpha_rad - expected.alpha_rad).abs() < 1e-9);
+        assert_eq!(refit.truth, grasp.truth.as_ref().map(|t| t.line));
+    }
+    // Another estimator on the same frames answers differently.
+    let ridge = replay.refit(Estimator::Ridge);
+    assert_eq!(ridge.len(), again.len());
+    let moved = (ridge[0].line.as_ref().unwrap().offset_mm
+        - again[0].line.as_ref().unwrap().offset_mm)
+        .abs();
+    assert!(moved > 1e-6, "ridge gave the centroids' answer");
+
+    let output = cablecell(&["replay", path.to_str().unwrap(), "--estimator", "ridge"]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}");
+    assert!(stdout.contains("/tactile/raw 70"), "{stdout}");
+    assert!(
+        stdout.contains("ridge again on the recorded frames (2 grasps)"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn replay_refuses_what_is_not_a_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("not.mcap");
+    std::fs::write(&path, "not an mcap file at all").unwrap();
+    let output = cablecell(&["replay", path.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("not.mcap"), "{stderr}");
+}
+
+#[test]
+fn the_run_command_records_where_it_is_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("deep/run.mcap");
+    let output = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--cell",
+        common::sim_cell_with_oracle_file(dir.path())
+            .to_str()
+            .unwrap(),
+        "--seed",
+        "3",
+        "--record",
+        path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success());
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("recorded to"), "{stderr}");
+    let recording = Recording::read(&path).unwrap();
+    assert_eq!(recording.truncated, None);
+    assert_eq!(recording.count(Topic::TactileFit), 2);
+}
+
+#[test]
+fn every_campaign_trial_is_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let overrides = Overrides {
+        trials: Some(3),
+        seed: Some(5),
+        out: Some(dir.path().to_owned()),
+        no_record: false,
+    };
+    let campaign =
+        Campaign::load(&root().join("tasks/paper-regrasp-campaign.toml"), overrides).unwrap();
+    let entries = campaign.run(false, 2, |_| {}).unwrap();
+    assert_eq!(entries.len(), 3 * campaign.file.policies.len());
+    for entry in &entries {
+        let name = entry.recording.as_ref().expect("recorded");
+        let recording = Recording::read(&campaign.recordings_folder().join(name)).unwrap();
+        assert_eq!(recording.truncated, None);
+        let replay = Replay::of(&recording).unwrap();
+        assert_eq!(replay.run.seed, entry.seed);
+        assert_eq!(replay.fits.len(), entry.grasps.len());
+    }
+}
