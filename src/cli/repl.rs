@@ -129,11 +129,11 @@ pub fn repl(
         task: None,
         pause,
     };
-    if let Some(task) = task {
-        if let Err(message) = session.load(task) {
-            eprintln!("error: {message}");
-            return Status::BadInput;
-        }
+    if let Some(task) = task
+        && let Err(message) = session.load(task)
+    {
+        eprintln!("error: {message}");
+        return Status::BadInput;
     }
     let mut editor = match Editor::<ReplHelper, FileHistory>::new() {
         Ok(editor) => editor,

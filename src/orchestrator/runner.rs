@@ -147,15 +147,13 @@ impl Runner {
         };
         let recorder = &mut recording.recorder;
         let now_s = self.context.now_s;
-        match command {
-            Some(
-                Command::MoveTo { base_from_tcp, .. }
-                | Command::Grasp { base_from_tcp, .. }
-                | Command::Regrasp { base_from_tcp, .. },
-            ) => {
-                recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
-            }
-            _ => {}
+        if let Some(
+            Command::MoveTo { base_from_tcp, .. }
+            | Command::Grasp { base_from_tcp, .. }
+            | Command::Regrasp { base_from_tcp, .. },
+        ) = command
+        {
+            recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
         }
         if let Event::Tactile { frames, .. } = event {
             recorder.tactile_frames(state, frames)?;
