@@ -160,7 +160,7 @@ impl Runner {
         }
         let record = &self.context.record;
         for grasp in &record.grasps[recording.grasps..] {
-            recorder.grasp(grasp)?;
+            recorder.grasp(grasp, self.plan.estimator)?;
         }
         recording.grasps = record.grasps.len();
         for transition in &record.transitions[recording.transitions..] {

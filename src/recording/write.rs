@@ -31,7 +31,6 @@ pub struct Recorder {
     sequence: u32,
     /// From the first frames read (`prepare`'s), to record Δv.
     bias: Option<Bias>,
-    estimator: Estimator,
 }
 
 impl Recorder {
@@ -70,7 +69,6 @@ impl Recorder {
             channels,
             sequence: 0,
             bias: None,
-            estimator: run.estimator,
         };
         recorder.write(Topic::Run, 0.0, run)?;
         Ok(recorder)
@@ -152,7 +150,13 @@ impl Recorder {
         self.log(transition.t_s, 2, text)
     }
 
-    pub fn grasp(&mut self, grasp: &GraspRecord) -> Result<(), RecordingError> {
+    /// A grasp judged with `estimator` (the REPL's `set` may change it
+    /// during a run).
+    pub fn grasp(
+        &mut self,
+        grasp: &GraspRecord,
+        estimator: Estimator,
+    ) -> Result<(), RecordingError> {
         let line = grasp.fit.as_ref().map(Estimate::line);
         let centroids_mm = match &grasp.fit {
             Some(Estimate::Centroids(fit)) => {
@@ -163,7 +167,7 @@ impl Recorder {
         let message = TactileFitMessage {
             timestamp: Timestamp::of(grasp.t_s),
             attempt: grasp.attempt,
-            estimator: self.estimator,
+            estimator,
             map_dv_v: row_major(&grasp.map),
             peak_dv_v: grasp.map.peak_dv_v(),
             n_mm: line.map(|l| l.offset_mm),
