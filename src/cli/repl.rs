@@ -362,11 +362,14 @@ impl Session {
                         .params
                         .set(param, &value)
                         .map_err(|e| e.to_string())?;
-                    loaded
+                    let recorded = loaded
                         .driver
                         .runner
                         .set_plan(Plan::new(loaded.params.task(), &cell));
                     println!("{param} = {value} (from the next command on)");
+                    if let Err(error) = recorded {
+                        println!("warning: {error}; the run goes on unrecorded");
+                    }
                 }
                 _ => return Err("usage: set PARAM VALUE (`show params` lists them)".into()),
             },

@@ -70,8 +70,15 @@ impl Recorder {
             sequence: 0,
             bias: None,
         };
-        recorder.write(Topic::Run, 0.0, run)?;
+        recorder.run(run)?;
         Ok(recorder)
+    }
+
+    /// The run's description: at the start, and again whenever its plan
+    /// changes.
+    pub fn run(&mut self, run: &RunMessage) -> Result<(), RecordingError> {
+        let t_s = f64::from(run.timestamp.sec) + f64::from(run.timestamp.nsec) * 1e-9;
+        self.write(Topic::Run, t_s, run)
     }
 
     pub fn path(&self) -> &Path {
