@@ -229,3 +229,32 @@ fn every_campaign_trial_is_recorded() {
         assert_eq!(replay.fits.len(), entry.grasps.len());
     }
 }
+
+#[test]
+fn a_plan_changed_mid_run_is_recorded_with_the_grasps_it_judged() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    let mut task = load_task(&root().join("tasks/regrasp.toml")).unwrap();
+    let cell = common::sim_cell_with_oracle();
+    let mut runner = Runner::for_task(&task, &cell, 3).expect("a simulated cell builds");
+    runner.record_to(&path, true).unwrap();
+    while runner.record().grasps.is_empty() {
+        assert!(runner.step().unwrap());
+    }
+    task.tactile.estimator = Estimator::Ridge;
+    runner
+        .set_plan(cablecell::orchestrator::Plan::new(&task, &cell))
+        .unwrap();
+    runner.run_to_end().unwrap();
+    runner.finish_recording().unwrap();
+    let record = runner.into_record();
+    assert!(record.grasps.len() >= 2);
+
+    let replay = Replay::of(&Recording::read(&path).unwrap()).unwrap();
+    assert_eq!(replay.run.estimator, Estimator::Centroids);
+    assert_eq!(replay.changes.len(), 1);
+    assert_eq!(replay.changes[0].estimator, Estimator::Ridge);
+    let estimators: Vec<Estimator> = replay.fits.iter().map(|f| f.estimator).collect();
+    assert_eq!(estimators[0], Estimator::Centroids);
+    assert!(estimators[1..].iter().all(|e| *e == Estimator::Ridge));
+}

@@ -130,11 +130,11 @@ pub fn repl(
         task: None,
         pause,
     };
-    if let Some(task) = task {
-        if let Err(message) = session.load(task) {
-            eprintln!("error: {message}");
-            return Status::BadInput;
-        }
+    if let Some(task) = task
+        && let Err(message) = session.load(task)
+    {
+        eprintln!("error: {message}");
+        return Status::BadInput;
     }
     let mut editor = match Editor::<ReplHelper, FileHistory>::new() {
         Ok(editor) => editor,
@@ -366,11 +366,14 @@ impl Session {
                         .params
                         .set(param, &value)
                         .map_err(|e| e.to_string())?;
-                    loaded
+                    let recorded = loaded
                         .driver
                         .runner
                         .set_plan(Plan::new(loaded.params.task(), &cell));
                     println!("{param} = {value} (from the next command on)");
+                    if let Err(error) = recorded {
+                        println!("warning: {error}; the run goes on unrecorded");
+                    }
                 }
                 _ => return Err("usage: set PARAM VALUE (`show params` lists them)".into()),
             },

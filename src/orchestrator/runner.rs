@@ -69,9 +69,20 @@ impl Runner {
     /// `flush_each_step` makes every step durable as it ends (for runs a
     /// person watches); a campaign's trials flush only when they finish.
     pub fn record_to(&mut self, path: &Path, flush_each_step: bool) -> Result<(), RecordingError> {
+        self.recording = Some(Recording {
+            recorder: Recorder::create(path, &self.run_message(0.0))?,
+            transitions: 0,
+            grasps: 0,
+            flush_each_step,
+        });
+        Ok(())
+    }
+
+    /// The run's description with the plan in force at `t_s`.
+    fn run_message(&self, t_s: f64) -> RunMessage {
         let record = &self.context.record;
-        let run = RunMessage {
-            timestamp: Timestamp::of(0.0),
+        RunMessage {
+            timestamp: Timestamp::of(t_s),
             task: record.task.clone(),
             cell: record.cell.clone(),
             seed: record.seed,
@@ -81,14 +92,7 @@ impl Runner {
             pitch_mm: self.plan.fit.pitch_mm,
             contact_threshold_v: self.plan.fit.contact_threshold_v,
             bias_frames: self.plan.bias_frames,
-        };
-        self.recording = Some(Recording {
-            recorder: Recorder::create(path, &run)?,
-            transitions: 0,
-            grasps: 0,
-            flush_each_step,
-        });
-        Ok(())
+        }
     }
 
     /// Handles one event: `Start` when idle, else the answer to the pending
@@ -152,22 +156,20 @@ impl Runner {
         };
         let recorder = &mut recording.recorder;
         let now_s = self.context.now_s;
-        match command {
-            Some(
-                Command::MoveTo { base_from_tcp, .. }
-                | Command::Grasp { base_from_tcp, .. }
-                | Command::Regrasp { base_from_tcp, .. },
-            ) => {
-                recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
-            }
-            _ => {}
+        if let Some(
+            Command::MoveTo { base_from_tcp, .. }
+            | Command::Grasp { base_from_tcp, .. }
+            | Command::Regrasp { base_from_tcp, .. },
+        ) = command
+        {
+            recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
         }
         if let Event::Tactile { frames, .. } = event {
             recorder.tactile_frames(state, frames)?;
         }
         let record = &self.context.record;
         for grasp in &record.grasps[recording.grasps..] {
-            recorder.grasp(grasp)?;
+            recorder.grasp(grasp, self.plan.estimator)?;
         }
         recording.grasps = record.grasps.len();
         for transition in &record.transitions[recording.transitions..] {
@@ -227,7 +229,9 @@ impl Runner {
 
     /// Replaces the plan between two steps. The pending command was given
     /// with the old one; every later command and judgement uses `plan`.
-    pub fn set_plan(&mut self, plan: Plan) {
+    /// A recording gets the new plan as a new `/run` message; if that
+    /// cannot be written the recording ends (the error is returned once).
+    pub fn set_plan(&mut self, plan: Plan) -> Result<(), RecordingError> {
         self.context.record.target = plan.target;
         self.context.record.tolerance = plan.tolerance;
         // SAFETY: statig marks `inner_mut` unsafe only because a change may
@@ -235,6 +239,15 @@ impl Runner {
         // actions and handlers alone, and the state is left as it is.
         unsafe { self.machine.inner_mut() }.set_plan(plan.clone());
         self.plan = plan;
+        let run = self.run_message(self.cell.clock.now_s());
+        let Some(recording) = &mut self.recording else {
+            return Ok(());
+        };
+        let written = recording.recorder.run(&run);
+        if written.is_err() {
+            self.recording = None;
+        }
+        written
     }
 
     /// Where the arm's TCP is now, asked of the arm.

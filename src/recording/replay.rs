@@ -11,7 +11,10 @@ use crate::perception::tactile::{BiasEstimator, Estimator, FitConfig, FitError, 
 /// What a recording says happened.
 #[derive(Debug, Clone)]
 pub struct Replay {
+    /// The run as it started.
     pub run: RunMessage,
+    /// The run's description each time its plan changed (the REPL's `set`).
+    pub changes: Vec<RunMessage>,
     pub transitions: Vec<TransitionMessage>,
     pub fits: Vec<TactileFitMessage>,
     raw: Vec<TactileRawMessage>,
@@ -46,15 +49,13 @@ impl Refit {
 
 impl Replay {
     pub fn of(recording: &Recording) -> Result<Self, RecordingError> {
-        let run = recording
-            .decode::<RunMessage>(Topic::Run)?
-            .into_iter()
-            .next()
-            .ok_or_else(|| RecordingError::NotARun {
-                path: recording.path.clone(),
-            })?;
+        let mut runs = recording.decode::<RunMessage>(Topic::Run)?.into_iter();
+        let run = runs.next().ok_or_else(|| RecordingError::NotARun {
+            path: recording.path.clone(),
+        })?;
         Ok(Self {
             run,
+            changes: runs.collect(),
             transitions: recording.decode(Topic::State)?,
             fits: recording.decode(Topic::TactileFit)?,
             raw: recording.decode(Topic::TactileRaw)?,
@@ -76,10 +77,6 @@ impl Replay {
         else {
             return Vec::new();
         };
-        let config = FitConfig {
-            pitch_mm: self.run.pitch_mm,
-            contact_threshold_v: self.run.contact_threshold_v,
-        };
         let mut after_s = f64::NEG_INFINITY;
         self.fits
             .iter()
@@ -94,6 +91,15 @@ impl Replay {
                     .collect();
                 after_s = fit_s;
                 let map = bias.remove_mean(&frames)?;
+                // The plan in force when the grasp was judged.
+                let plan = std::iter::once(&self.run)
+                    .chain(&self.changes)
+                    .rfind(|run| seconds(run.timestamp) <= fit_s)
+                    .unwrap_or(&self.run);
+                let config = FitConfig {
+                    pitch_mm: plan.pitch_mm,
+                    contact_threshold_v: plan.contact_threshold_v,
+                };
                 let truth = fit
                     .true_n_mm
                     .zip(fit.true_alpha_rad)

@@ -31,7 +31,6 @@ pub struct Recorder {
     sequence: u32,
     /// From the first frames read (`prepare`'s), to record Δv.
     bias: Option<Bias>,
-    estimator: Estimator,
 }
 
 impl Recorder {
@@ -50,7 +49,8 @@ impl Recorder {
             .emit_message_indexes(false)
             .library(concat!("cablecell ", env!("CARGO_PKG_VERSION")));
         let mut writer = options
-            .create(BufWriter::new(file))
+            // A trial's recording (about 40 KB) in one or two writes.
+            .create(BufWriter::with_capacity(64 * 1024, file))
             .map_err(RecordingError::mcap(path))?;
         let mut channels = BTreeMap::new();
         for topic in Topic::ALL {
@@ -69,10 +69,16 @@ impl Recorder {
             channels,
             sequence: 0,
             bias: None,
-            estimator: run.estimator,
         };
-        recorder.write(Topic::Run, 0.0, run)?;
+        recorder.run(run)?;
         Ok(recorder)
+    }
+
+    /// The run's description: at the start, and again whenever its plan
+    /// changes.
+    pub fn run(&mut self, run: &RunMessage) -> Result<(), RecordingError> {
+        let t_s = f64::from(run.timestamp.sec) + f64::from(run.timestamp.nsec) * 1e-9;
+        self.write(Topic::Run, t_s, run)
     }
 
     pub fn path(&self) -> &Path {
@@ -151,7 +157,13 @@ impl Recorder {
         self.log(transition.t_s, 2, text)
     }
 
-    pub fn grasp(&mut self, grasp: &GraspRecord) -> Result<(), RecordingError> {
+    /// A grasp judged with `estimator` (the REPL's `set` may change it
+    /// during a run).
+    pub fn grasp(
+        &mut self,
+        grasp: &GraspRecord,
+        estimator: Estimator,
+    ) -> Result<(), RecordingError> {
         let line = grasp.fit.as_ref().map(Estimate::line);
         let centroids_mm = match &grasp.fit {
             Some(Estimate::Centroids(fit)) => {
@@ -162,7 +174,7 @@ impl Recorder {
         let message = TactileFitMessage {
             timestamp: Timestamp::of(grasp.t_s),
             attempt: grasp.attempt,
-            estimator: self.estimator,
+            estimator,
             map_dv_v: row_major(&grasp.map),
             peak_dv_v: grasp.map.peak_dv_v(),
             n_mm: line.map(|l| l.offset_mm),
