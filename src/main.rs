@@ -67,6 +67,13 @@ enum Command {
         /// ridge, oracle), to compare them on the same inputs.
         #[arg(long, value_delimiter = ',', value_parser = parse_estimator)]
         estimator: Vec<cablecell::perception::tactile::Estimator>,
+        /// Run the vision pipeline again on the recorded camera images (with
+        /// the pipeline's options below), to compare settings on the same
+        /// inputs.
+        #[arg(long)]
+        vision: bool,
+        #[command(flatten)]
+        vision_args: cli::vision_io::VisionArgs,
     },
     /// Print the task's state machine as Graphviz DOT (`| dot -Tsvg`).
     Graph { task: PathBuf },
@@ -245,7 +252,12 @@ fn main() -> ExitCode {
             pace,
             record,
         } => cli::repl::repl(task.as_deref(), &cell, seed, record, pace),
-        Command::Replay { file, estimator } => cli::replay::replay(&file, &estimator),
+        Command::Replay {
+            file,
+            estimator,
+            vision,
+            vision_args,
+        } => cli::replay::replay(&file, &estimator, vision.then_some(&vision_args)),
         Command::Graph { task } => cli::graph::graph(&task),
         Command::Campaign {
             file,

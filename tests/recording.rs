@@ -52,6 +52,8 @@ fn expected_counts(record: &RunRecord) -> BTreeMap<&'static str, u64> {
         ("/tactile/fit", grasps),
         ("/arm/grasp_pose", grasps),
         ("/arm/target", targets),
+        // The oracle detector looks at no image.
+        ("/camera/image", 0),
     ])
 }
 
@@ -74,6 +76,7 @@ fn a_recording_holds_every_channel_with_foxglove_schemas_and_the_right_counts() 
         let expected_schema = match channel.topic.as_str() {
             "/log" => "foxglove.Log",
             "/arm/grasp_pose" | "/arm/target" => "foxglove.PoseInFrame",
+            "/camera/image" => "foxglove.CompressedImage",
             _ => "cablecell.",
         };
         assert!(schema.name.starts_with(expected_schema), "{}", schema.name);
@@ -257,4 +260,45 @@ fn a_plan_changed_mid_run_is_recorded_with_the_grasps_it_judged() {
     let estimators: Vec<Estimator> = replay.fits.iter().map(|f| f.estimator).collect();
     assert_eq!(estimators[0], Estimator::Centroids);
     assert!(estimators[1..].iter().all(|e| *e == Estimator::Ridge));
+}
+
+#[test]
+fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("vision.mcap");
+    let output = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--seed",
+        "2",
+        "--record",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let recording = Recording::read(&path).unwrap();
+    assert_eq!(recording.count(Topic::CameraImage), 1);
+    let images: Vec<cablecell::recording::schema::CompressedImageMessage> =
+        recording.decode(Topic::CameraImage).unwrap();
+    assert_eq!(images[0].format, "png");
+    assert!(images[0].data.starts_with(b"\x89PNG"));
+
+    let output = cablecell(&[
+        "replay",
+        path.to_str().unwrap(),
+        "--vision",
+        "--mask",
+        "network",
+    ]);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{text}");
+    assert!(
+        text.contains("vision again on the recorded images (1):"),
+        "{text}"
+    );
+    assert!(text.contains("Network mask"), "{text}");
+    assert!(text.contains("cable 0: grasp at ("), "{text}");
 }

@@ -65,8 +65,14 @@ fn the_detected_grasp_frame_is_the_cable_s_midpoint_frame() {
         let mut cell = Cell::build(&file, seed).expect("the simulated cell builds");
         let found = cell.detector.detect(cell.camera.as_mut()).expect("detect");
         // Clutter may show up too, after the cable.
-        assert!(!found.is_empty(), "seed {seed}: the cable is in view");
-        let frame = found[0].base_from_cable;
+        assert!(
+            !found.cables.is_empty(),
+            "seed {seed}: the cable is in view"
+        );
+        let frame = found.cables[0].base_from_cable;
+        // The image it looked at travels with what it found.
+        let image = found.image.expect("the vision detector keeps its image");
+        assert_eq!((image.0.cols(), image.0.rows()), (640, 480));
         // Across the cable, in its plane, is what puts the cable off the
         // pad's axis; along it, s = 0.5 of what the camera sees of the
         // cable may slide a little, and matters little.

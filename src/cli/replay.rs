@@ -5,11 +5,15 @@ use std::path::Path;
 use cablecell::geometry::LineInSensor;
 use cablecell::perception::tactile::Estimator;
 use cablecell::recording::replay::{Refit, Replay};
+use cablecell::recording::schema::CompressedImageMessage;
 use cablecell::recording::{Recording, Topic};
+use opencv::imgcodecs;
+use opencv::prelude::*;
 
 use super::Status;
+use super::vision_io::VisionArgs;
 
-pub fn replay(path: &Path, estimators: &[Estimator]) -> Status {
+pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>) -> Status {
     let recording = match Recording::read(path) {
         Ok(recording) => recording,
         Err(error) => {
@@ -66,7 +70,61 @@ pub fn replay(path: &Path, estimators: &[Estimator]) -> Status {
         );
         refits.iter().for_each(print_refit);
     }
-    Status::Success
+    match vision {
+        Some(args) => detect_again(&recording, args),
+        None => Status::Success,
+    }
+}
+
+/// Runs the vision pipeline of `args` on every recorded camera image.
+fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
+    let images: Vec<CompressedImageMessage> = match recording.decode(Topic::CameraImage) {
+        Ok(images) => images,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    println!("vision again on the recorded images ({}):", images.len());
+    let mut pipeline = args.pipeline();
+    let mut network = args.network();
+    let mut status = Status::Success;
+    for message in &images {
+        let t_s = f64::from(message.timestamp.sec) + f64::from(message.timestamp.nsec) * 1e-9;
+        let bytes = opencv::core::Vector::<u8>::from_slice(&message.data);
+        let image = match imgcodecs::imdecode(&bytes, imgcodecs::IMREAD_COLOR) {
+            Ok(image) if !image.empty() => image,
+            _ => {
+                eprintln!(
+                    "error: the image at {t_s:.3} s is not a {} OpenCV can decode",
+                    message.format
+                );
+                status = Status::BadInput;
+                continue;
+            }
+        };
+        match pipeline.detect(&image, Some(&mut network)) {
+            Ok(output) => {
+                let total_ms: f64 = output.timings_ms.iter().map(|(_, ms)| ms).sum();
+                println!(
+                    "{t_s:9.3} s  {} cable(s), {:?} mask, {total_ms:.1} ms",
+                    output.cables.len(),
+                    output.mask_used
+                );
+                for (k, cable) in output.cables.iter().enumerate() {
+                    println!(
+                        "    cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {:.0} px long",
+                        cable.grasp_px[0], cable.grasp_px[1], cable.direction_rad, cable.length_px
+                    );
+                }
+            }
+            Err(error) => {
+                eprintln!("error: the image at {t_s:.3} s: {error}");
+                status = Status::TaskFailed;
+            }
+        }
+    }
+    status
 }
 
 fn print_refit(refit: &Refit) {

@@ -4,7 +4,7 @@ use nalgebra::Isometry3;
 
 use crate::geometry::LineInSensor;
 use crate::hw::DeviceError;
-use crate::hw::detector::CableDetection;
+use crate::hw::detector::Detections;
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
 
@@ -55,7 +55,8 @@ pub enum Event {
         /// simulation): kept in the record beside the estimate.
         true_line: Option<LineInSensor>,
     },
-    Detected(Vec<CableDetection>),
+    /// The cables found, best first, and the image they were found in.
+    Detected(Detections),
     Arrived,
     Grasped {
         /// The arm's measured pose with the jaws closed.

@@ -122,7 +122,7 @@ impl GraspTask {
     #[state(superstate = "grasping", entry_action = "enter_detect")]
     fn detect(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Detected(detections) => match detections.first() {
+            Event::Detected(detections) => match detections.cables.first() {
                 Some(detection) => {
                     // Aim so that the cable lands on the target pose.
                     let sensor_from_cable = planar_to_spatial(&self.plan.target.sensor_from_line());
@@ -451,7 +451,7 @@ mod tests {
 
     use super::*;
     use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
-    use crate::hw::detector::CableDetection;
+    use crate::hw::detector::{CableDetection, Detections};
     use crate::hw::{DeviceError, DeviceKind};
     use crate::perception::tactile::{Estimator, FitConfig};
     use crate::sim::tactile_model::TactileModel;
@@ -553,7 +553,10 @@ mod tests {
             let detection = CableDetection {
                 base_from_cable: Isometry3::identity(),
             };
-            let moved = self.feed(Event::Detected(vec![detection]));
+            let moved = self.feed(Event::Detected(Detections {
+                cables: vec![detection],
+                image: None,
+            }));
             assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
             self.feed(Event::Arrived).expect("grasp command")
         }
@@ -683,7 +686,10 @@ mod tests {
         let mut h = Harness::new(1);
         h.feed(Event::Start);
         h.feed(h.frames(50, None));
-        h.feed(Event::Detected(Vec::new()));
+        h.feed(Event::Detected(Detections {
+            cables: Vec::new(),
+            image: None,
+        }));
         assert_eq!(h.state(), "failed");
         assert!(matches!(
             h.context.record.outcome,
@@ -698,9 +704,12 @@ mod tests {
         let mut h = Harness::new(1);
         h.feed(Event::Start);
         h.feed(h.frames(50, None));
-        h.feed(Event::Detected(vec![CableDetection {
-            base_from_cable: Isometry3::identity(),
-        }]));
+        h.feed(Event::Detected(Detections {
+            cables: vec![CableDetection {
+                base_from_cable: Isometry3::identity(),
+            }],
+            image: None,
+        }));
         assert_eq!(h.state(), "approach");
         let error = DeviceError::Timeout {
             device: DeviceKind::Arm,

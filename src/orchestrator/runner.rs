@@ -16,6 +16,7 @@ use super::plan::Plan;
 use super::record::RunRecord;
 use crate::cell::Cell;
 use crate::hw::DeviceError;
+use crate::hw::detector::Detections;
 use crate::recording::schema::{RunMessage, Timestamp};
 use crate::recording::{Recorder, RecordingError, Topic};
 use crate::task::{CellFile, TaskFile};
@@ -166,6 +167,12 @@ impl Runner {
         }
         if let Event::Tactile { frames, .. } = event {
             recorder.tactile_frames(state, frames)?;
+        }
+        if let Event::Detected(Detections {
+            image: Some(image), ..
+        }) = event
+        {
+            recorder.camera_image(now_s, image)?;
         }
         let record = &self.context.record;
         for grasp in &record.grasps[recording.grasps..] {

@@ -48,6 +48,14 @@ pub enum RecordingError {
     /// runs (or was cut off before its first message).
     #[error("{}: no /run message: not a cablecell run recording", path.display())]
     NotARun { path: PathBuf },
+    /// OpenCV could not encode a camera image as PNG, or decode a recorded
+    /// one (a damaged recording).
+    #[error("{}: camera image: {source}", path.display())]
+    Image {
+        path: PathBuf,
+        #[source]
+        source: opencv::Error,
+    },
 }
 
 impl RecordingError {

@@ -4,9 +4,7 @@
 //!
 //! A new channel is one [`Topic`] variant, its row in [`Topic::ALL`] and
 //! its schema text, plus a message struct and a `Recorder` method that
-//! writes it. Camera images would be `Topic::CameraImage` on
-//! `/camera/image` with Foxglove's `foxglove.CompressedImage` (PNG bytes,
-//! base64 in JSON) or `foxglove.RawImage`.
+//! writes it.
 
 use serde::{Deserialize, Serialize};
 
@@ -32,10 +30,12 @@ pub enum Topic {
     GraspPose,
     /// Each pose the machine sends the arm to.
     ArmTarget,
+    /// Each image the vision detector looked at, as PNG.
+    CameraImage,
 }
 
 impl Topic {
-    pub const ALL: [Topic; 8] = [
+    pub const ALL: [Topic; 9] = [
         Topic::Run,
         Topic::State,
         Topic::Log,
@@ -44,6 +44,7 @@ impl Topic {
         Topic::TactileFit,
         Topic::GraspPose,
         Topic::ArmTarget,
+        Topic::CameraImage,
     ];
 
     pub fn name(self) -> &'static str {
@@ -56,6 +57,7 @@ impl Topic {
             Topic::TactileFit => "/tactile/fit",
             Topic::GraspPose => "/arm/grasp_pose",
             Topic::ArmTarget => "/arm/target",
+            Topic::CameraImage => "/camera/image",
         }
     }
 
@@ -69,6 +71,7 @@ impl Topic {
             Topic::TactileDv => ("cablecell.TactileDv", TACTILE_DV_SCHEMA),
             Topic::TactileFit => ("cablecell.TactileFit", TACTILE_FIT_SCHEMA),
             Topic::GraspPose | Topic::ArmTarget => ("foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA),
+            Topic::CameraImage => ("foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA),
         }
     }
 }
@@ -197,6 +200,32 @@ pub struct PoseInFrameMessage {
     pub pose: Pose,
 }
 
+/// `foxglove.CompressedImage`: the image file's bytes (base64 in JSON, as
+/// Foxglove reads bytes there) and its format.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CompressedImageMessage {
+    pub timestamp: Timestamp,
+    pub frame_id: String,
+    #[serde(with = "base64_bytes")]
+    pub data: Vec<u8>,
+    pub format: String,
+}
+
+mod base64_bytes {
+    use base64::Engine;
+    use base64::engine::general_purpose::STANDARD;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(bytes: &[u8], serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(&STANDARD.encode(bytes))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<u8>, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        STANDARD.decode(text).map_err(serde::de::Error::custom)
+    }
+}
+
 macro_rules! schema {
     ($title:literal, $props:literal) => {
         concat!(
@@ -236,6 +265,11 @@ const TACTILE_FIT_SCHEMA: &str = schema!(
 const POSE_IN_FRAME_SCHEMA: &str = schema!(
     "foxglove.PoseInFrame",
     r#""frame_id":{"type":"string"},"pose":{"title":"foxglove.Pose","type":"object","properties":{"position":{"title":"foxglove.Vector3","type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"title":"foxglove.Quaternion","type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}"#
+);
+
+const COMPRESSED_IMAGE_SCHEMA: &str = schema!(
+    "foxglove.CompressedImage",
+    r#""frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}"#
 );
 
 #[cfg(test)]

@@ -7,14 +7,16 @@ use std::path::{Path, PathBuf};
 
 use mcap::records::MessageHeader;
 use nalgebra::Isometry3;
+use opencv::core::VectorToVec;
 use serde::Serialize;
 
 use super::RecordingError;
 use super::schema::{
-    LogMessage, Pose, PoseInFrameMessage, Quaternion, RunMessage, TactileDvMessage,
-    TactileFitMessage, TactileRawMessage, Timestamp, Topic, TransitionMessage, Vector3,
-    log_time_ns,
+    CompressedImageMessage, LogMessage, Pose, PoseInFrameMessage, Quaternion, RunMessage,
+    TactileDvMessage, TactileFitMessage, TactileRawMessage, Timestamp, Topic, TransitionMessage,
+    Vector3, log_time_ns,
 };
+use crate::hw::camera::CameraImage;
 use crate::hw::tactile::TactileFrame;
 use crate::orchestrator::record::{GraspRecord, RunOutcome, RunRecord, TransitionRecord};
 use crate::perception::tactile::{Bias, BiasEstimator, Estimate, Estimator, TactileMap};
@@ -187,6 +189,24 @@ impl Recorder {
         };
         self.write(Topic::TactileFit, grasp.t_s, &message)?;
         self.pose(Topic::GraspPose, grasp.t_s, &grasp.base_from_tcp)
+    }
+
+    /// An image the camera took, as PNG (lossless, so that a replay runs
+    /// the vision pipeline on exactly what the detector saw).
+    pub fn camera_image(&mut self, t_s: f64, image: &CameraImage) -> Result<(), RecordingError> {
+        let mut png = opencv::core::Vector::<u8>::new();
+        opencv::imgcodecs::imencode(".png", &*image.0, &mut png, &opencv::core::Vector::new())
+            .map_err(|source| RecordingError::Image {
+                path: self.path.clone(),
+                source,
+            })?;
+        let message = CompressedImageMessage {
+            timestamp: Timestamp::of(t_s),
+            frame_id: "camera".into(),
+            data: png.to_vec(),
+            format: "png".into(),
+        };
+        self.write(Topic::CameraImage, t_s, &message)
     }
 
     /// A pose of the TCP in the arm's base frame (mm) on `topic`.

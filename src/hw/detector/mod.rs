@@ -12,7 +12,7 @@ pub use vision::VisionDetector;
 use nalgebra::Isometry3;
 
 use super::DeviceError;
-use super::camera::Camera;
+use super::camera::{Camera, CameraImage};
 
 /// A cable found in the scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,8 +24,16 @@ pub struct CableDetection {
     pub base_from_cable: Isometry3<f64>,
 }
 
+/// What a detector found, and the image it looked at, if it looked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Detections {
+    /// Every cable in view, best first.
+    pub cables: Vec<CableDetection>,
+    pub image: Option<CameraImage>,
+}
+
 pub trait CableDetector: Send {
     /// Every cable in view, best first, looking through `camera` if the
     /// detector needs to.
-    fn detect(&mut self, camera: &mut dyn Camera) -> Result<Vec<CableDetection>, DeviceError>;
+    fn detect(&mut self, camera: &mut dyn Camera) -> Result<Detections, DeviceError>;
 }

@@ -7,7 +7,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-use super::{CableDetection, CableDetector};
+use super::{CableDetection, CableDetector, Detections};
 use crate::hw::DeviceError;
 use crate::hw::camera::Camera;
 use crate::sim::world::{SharedWorld, lock};
@@ -27,7 +27,7 @@ impl OracleDetector {
 
 impl CableDetector for OracleDetector {
     /// The true grasp frame, disturbed; the camera is not needed.
-    fn detect(&mut self, _camera: &mut dyn Camera) -> Result<Vec<CableDetection>, DeviceError> {
+    fn detect(&mut self, _camera: &mut dyn Camera) -> Result<Detections, DeviceError> {
         let config = &self.config;
         let across_mm = config.offset_across_mm
             + config.position_noise_mm * self.rng.sample::<f64, _>(StandardNormal);
@@ -38,6 +38,9 @@ impl CableDetector for OracleDetector {
             UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn_rad),
         );
         let base_from_cable = lock(&self.world).base_from_cable * cable_from_detected;
-        Ok(vec![CableDetection { base_from_cable }])
+        Ok(Detections {
+            cables: vec![CableDetection { base_from_cable }],
+            image: None,
+        })
     }
 }

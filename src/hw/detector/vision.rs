@@ -3,8 +3,10 @@
 //! s = 0.5 is placed in the base frame through the calibrated camera pose
 //! and the cable's known plane.
 
-use super::{CableDetection, CableDetector};
-use crate::hw::camera::Camera;
+use std::sync::Arc;
+
+use super::{CableDetection, CableDetector, Detections};
+use crate::hw::camera::{Camera, CameraImage};
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::vision::Pipeline;
 use crate::perception::vision::grasp_frame::ImageToBase;
@@ -30,7 +32,7 @@ impl VisionDetector {
 impl CableDetector for VisionDetector {
     /// The cables in the camera's image, the longest in view first (the
     /// one least likely to be a scrap of clutter).
-    fn detect(&mut self, camera: &mut dyn Camera) -> Result<Vec<CableDetection>, DeviceError> {
+    fn detect(&mut self, camera: &mut dyn Camera) -> Result<Detections, DeviceError> {
         let Some(to_base) = self.to_base else {
             return Err(DeviceError::Unusable {
                 device: DeviceKind::Detector,
@@ -60,6 +62,9 @@ impl CableDetector for VisionDetector {
             })
             .collect();
         found.sort_by(|a, b| b.0.total_cmp(&a.0));
-        Ok(found.into_iter().map(|(_, detection)| detection).collect())
+        Ok(Detections {
+            cables: found.into_iter().map(|(_, detection)| detection).collect(),
+            image: Some(CameraImage(Arc::new(image))),
+        })
     }
 }
