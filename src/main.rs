@@ -91,6 +91,10 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Render synthetic images of cables with exact masks and centre lines,
+    /// in the layout of cables-dev (training data for the network, test
+    /// data for eval-vision).
+    RenderDataset(cli::render_dataset::RenderDatasetArgs),
     /// Talk to one device and print what it answered: the first thing to
     /// run when bringing up a cell.
     Device {
@@ -192,6 +196,7 @@ fn main() -> ExitCode {
         Command::EvalVision { dir, vision, json } => {
             cli::eval_vision::eval_vision(&dir, &vision, json)
         }
+        Command::RenderDataset(args) => cli::render_dataset::render_dataset(&args),
         Command::Device { device } => match device {
             DeviceCommand::Gripper {
                 port,

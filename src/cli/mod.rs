@@ -7,6 +7,7 @@ pub mod detect;
 pub mod device;
 pub mod emulate;
 pub mod eval_vision;
+pub mod render_dataset;
 pub mod run;
 pub mod tactile_fit;
 pub mod vision_io;
