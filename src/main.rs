@@ -84,13 +84,7 @@ enum Command {
     },
     /// Score the vision pipeline on a folder laid out like cables-dev
     /// (NNNNN.jpg, NNNNN_mask_K.png, NNNNN_mask_all.png, NNNNN.txt).
-    EvalVision {
-        dir: PathBuf,
-        #[command(flatten)]
-        vision: cli::vision_io::VisionArgs,
-        #[arg(long)]
-        json: bool,
-    },
+    EvalVision(cli::eval_vision::EvalVisionArgs),
     /// Render synthetic images of cables with exact masks and centre lines,
     /// in the layout of cables-dev (training data for the network, test
     /// data for eval-vision).
@@ -193,9 +187,7 @@ fn main() -> ExitCode {
             masks,
             overlay,
         } => cli::detect::detect(&images, &vision, json, masks.as_deref(), overlay.as_deref()),
-        Command::EvalVision { dir, vision, json } => {
-            cli::eval_vision::eval_vision(&dir, &vision, json)
-        }
+        Command::EvalVision(args) => cli::eval_vision::eval_vision(&args),
         Command::RenderDataset(args) => cli::render_dataset::render_dataset(&args),
         Command::Device { device } => match device {
             DeviceCommand::Gripper {

@@ -4,7 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use cablecell::perception::vision::network::{NetworkError, SegmentationNet};
+use cablecell::perception::vision::network::{
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, SegmentationNet,
+};
+use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{
     InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError,
 };
@@ -32,6 +35,40 @@ pub struct VisionArgs {
     /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else .setup/onnxruntime/).
     #[arg(long)]
     pub onnxruntime: Option<PathBuf>,
+    /// The network's probability above which a pixel is cable.
+    #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = probability)]
+    pub threshold: f32,
+    /// The network's input size as a fraction of the image's (0.5: 320×240
+    /// for 640×480; smaller is faster).
+    #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
+    pub net_scale: f64,
+    /// Superpixel side in cable widths, for `--instances superpixels`
+    /// (smaller: more superpixels).
+    #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
+    pub superpixel_widths: f64,
+}
+
+fn number_in(text: &str, low: f64, high: f64) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if value > low && value <= high {
+        Ok(value)
+    } else {
+        Err(format!("{value} is outside ({low}, {high}]"))
+    }
+}
+
+fn probability(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1.0).map(|v| v as f32)
+}
+
+fn input_scale(text: &str) -> Result<f64, String> {
+    number_in(text, 0.0, 2.0)
+}
+
+fn region_widths(text: &str) -> Result<f64, String> {
+    number_in(text, 0.0, 20.0)
 }
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
@@ -59,6 +96,7 @@ impl VisionArgs {
                 InstancesArg::Skeleton => InstanceMethod::Skeleton,
                 InstancesArg::Superpixels => InstanceMethod::Superpixels,
             },
+            superpixel_widths: self.superpixel_widths,
             ..VisionConfig::default()
         };
         Pipeline::new(config)
@@ -73,6 +111,8 @@ impl VisionArgs {
         LazyNetwork {
             model: self.model.clone(),
             runtime,
+            threshold: self.threshold,
+            input_scale: self.net_scale,
             loaded: None,
         }
     }
@@ -83,6 +123,8 @@ impl VisionArgs {
 pub struct LazyNetwork {
     model: PathBuf,
     runtime: PathBuf,
+    threshold: f32,
+    input_scale: f64,
     loaded: Option<SegmentationNet>,
 }
 
@@ -90,17 +132,18 @@ impl MaskNetwork for LazyNetwork {
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
         let net = match &mut self.loaded {
             Some(net) => net,
-            None => self
-                .loaded
-                .insert(SegmentationNet::load(&self.model, &self.runtime).map_err(network_error)?),
+            None => {
+                let mut net = SegmentationNet::load(&self.model, &self.runtime).map_err(|e| {
+                    VisionError::Network {
+                        reason: e.to_string(),
+                    }
+                })?;
+                net.threshold = self.threshold;
+                net.input_scale = self.input_scale;
+                self.loaded.insert(net)
+            }
         };
-        net.mask(bgr).map_err(network_error)
-    }
-}
-
-fn network_error(error: NetworkError) -> VisionError {
-    VisionError::Network {
-        reason: error.to_string(),
+        MaskNetwork::mask(net, bgr)
     }
 }
 
