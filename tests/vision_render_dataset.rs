@@ -162,3 +162,82 @@ fn refuses_a_folder_that_holds_files_and_bad_options() {
     assert_eq!(run.status.code(), Some(2));
     assert!(!out.exists());
 }
+
+#[test]
+fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("plain");
+    let run = render(
+        &out,
+        &[
+            "--count",
+            "3",
+            "--seed",
+            "21",
+            "--backgrounds",
+            "plain",
+            "--max-cables",
+            "2",
+            "--no-crossings",
+        ],
+    );
+    assert!(run.status.success());
+
+    let eval = cablecell(&[
+        "eval-vision",
+        text(&out),
+        "--mask",
+        "classical",
+        "--from",
+        "00001",
+        "--json",
+    ]);
+    assert!(
+        eval.status.success(),
+        "{}",
+        String::from_utf8_lossy(&eval.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("JSON");
+    assert_eq!(e["images"], 2, "{e}");
+    let stems: Vec<&str> = e["per_image"]
+        .as_array()
+        .expect("per image")
+        .iter()
+        .map(|p| p[0].as_str().expect("stem"))
+        .collect();
+    assert_eq!(stems, ["00001", "00002"]);
+    // Exact ground truth and plain backgrounds: the classical mask matches.
+    assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
+
+    let none = cablecell(&["eval-vision", text(&out), "--from", "00005"]);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&none.stderr).contains("between 00005 and the last"));
+
+    let sweep = cablecell(&[
+        "eval-vision",
+        text(&out),
+        "--to",
+        "00000",
+        "--sweep",
+        "--json",
+    ]);
+    assert!(
+        sweep.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sweep.stderr)
+    );
+    let rows: serde_json::Value = serde_json::from_slice(&sweep.stdout).expect("JSON");
+    let settings: Vec<&str> = rows
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|r| r["setting"].as_str().expect("setting"))
+        .collect();
+    assert_eq!(settings.len(), 7, "{settings:?}");
+    assert!(settings[0].starts_with("classical mask"));
+    assert!(settings.iter().any(|s| s.contains("superpixels")));
+    assert!(
+        rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
+        "{rows}"
+    );
+}

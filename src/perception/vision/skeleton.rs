@@ -677,6 +677,40 @@ pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<V
     }
 }
 
+/// The cables from pixel paths, whichever method found them: pieces that
+/// continue each other joined, each run from its end with the smaller
+/// (x, y) and kept if at least `min_length_px` long, sorted by their first
+/// point.
+pub(super) fn finish_paths(
+    paths: Vec<Vec<[f64; 2]>>,
+    width_px: f64,
+    min_length_px: f64,
+) -> Vec<CablePath> {
+    let paths = join_continuations(paths, width_px);
+
+    let mut out: Vec<CablePath> = paths
+        .into_iter()
+        .filter_map(|mut points_px| {
+            let (first, last) = (*points_px.first()?, *points_px.last()?);
+            if (last[0], last[1]) < (first[0], first[1]) {
+                points_px.reverse();
+            }
+            let length_px = polyline_length(&points_px);
+            (length_px >= min_length_px).then_some(CablePath {
+                points_px,
+                length_px,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        let (pa, pb) = (a.points_px[0], b.points_px[0]);
+        (pa[0], pa[1])
+            .partial_cmp(&(pb[0], pb[1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    out
+}
+
 /// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
 /// end to end, of at least `min_length_px`.
 pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, VisionError> {
@@ -796,30 +830,8 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     for lp in &graph.loops {
         paths.push(lp.iter().map(|&i| graph.grid.xy(i)).collect());
     }
-    let paths = join_continuations(paths, width_px);
-
-    let mut out: Vec<CablePath> = paths
-        .into_iter()
-        .filter_map(|mut points_px| {
-            let (first, last) = (*points_px.first()?, *points_px.last()?);
-            if (last[0], last[1]) < (first[0], first[1]) {
-                points_px.reverse();
-            }
-            let length_px = polyline_length(&points_px);
-            (length_px >= min_length_px).then_some(CablePath {
-                points_px,
-                length_px,
-            })
-        })
-        .collect();
-    out.sort_by(|a, b| {
-        let (pa, pb) = (a.points_px[0], b.points_px[0]);
-        (pa[0], pa[1])
-            .partial_cmp(&(pb[0], pb[1]))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
     Ok(FoundPaths {
-        paths: out,
+        paths: finish_paths(paths, width_px, min_length_px),
         width_px,
     })
 }

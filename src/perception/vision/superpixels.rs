@@ -17,7 +17,7 @@ use opencv::ximgproc::{self, SuperpixelSLICTrait, SuperpixelSLICTraitConst};
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::skeleton::{CablePath, FoundPaths};
+use super::skeleton::{FoundPaths, finish_paths};
 
 /// Superpixel side, in cable widths, unless set otherwise: about two, so
 /// that a cable is one superpixel across and each node has a clear
@@ -242,34 +242,17 @@ pub fn paths_from_mask(
         for &n in &path {
             taken[n] = true;
         }
-        let mut points_px: Vec<[f64; 2]> = path
-            .iter()
-            .map(|&n| {
-                let c = nodes.centres_px[n];
-                [c[0] + offset[0], c[1] + offset[1]]
-            })
-            .collect();
-        if let (Some(first), Some(last)) = (points_px.first().copied(), points_px.last().copied())
-            && (last[0], last[1]) < (first[0], first[1])
-        {
-            points_px.reverse();
-        }
-        let length_px = points_px
-            .windows(2)
-            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-            .sum();
-        if length_px >= min_length_px {
-            paths.push(CablePath {
-                points_px,
-                length_px,
-            });
-        }
+        paths.push(
+            path.iter()
+                .map(|&n| {
+                    let c = nodes.centres_px[n];
+                    [c[0] + offset[0], c[1] + offset[1]]
+                })
+                .collect(),
+        );
     }
-    paths.sort_by(|a, b| {
-        let (pa, pb) = (a.points_px[0], b.points_px[0]);
-        (pa[0], pa[1])
-            .partial_cmp(&(pb[0], pb[1]))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
-    Ok(FoundPaths { paths, width_px })
+    Ok(FoundPaths {
+        paths: finish_paths(paths, width_px, min_length_px),
+        width_px,
+    })
 }
