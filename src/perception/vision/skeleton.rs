@@ -11,7 +11,9 @@
 //! thin into two 3-way junctions rather than one 4-way one. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least: a cable goes straight through a crossing. Walking edges and
-//! pairings from end to end gives one pixel path per cable.
+//! pairings from end to end gives one pixel path per cable. Last, paths
+//! whose ends face each other across a short gap are joined (a mask broken
+//! at a ferrule or a glint), for the superpixel method's paths too.
 
 use std::collections::HashMap;
 
