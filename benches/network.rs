@@ -1,14 +1,16 @@
 //! The segmentation network on one 640 × 480 BGR image, pre- and
 //! post-processing included (resize down, ONNX Runtime with 2 intra-op
 //! threads, resize the probability up, threshold): what `SegmentationNet::
-//! mask` costs the detector per camera frame. Uses the first held-out
+//! mask` costs the detector per camera frame, at three input sizes; and
+//! the whole pipeline with it. Uses the first held-out
 //! photograph of cables-dev when it lies beside the project, else a drawn
 //! image. The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
 //! `.setup/onnxruntime/` (run `scripts/setup`).
 
 use std::path::PathBuf;
 
-use cablecell::perception::vision::network::SegmentationNet;
+use cablecell::perception::vision::network::{DEFAULT_INPUT_SCALE, SegmentationNet};
+use cablecell::perception::vision::{MaskMethod, MaskNetwork, Pipeline, VisionConfig};
 use criterion::{Criterion, criterion_group, criterion_main};
 use opencv::core::{CV_8UC3, Mat, Point, Scalar, Vector};
 use opencv::prelude::*;
@@ -61,6 +63,33 @@ fn bench(c: &mut Criterion) {
     let image = image(&root);
     c.bench_function("network mask 640x480", |b| {
         b.iter(|| net.mask(std::hint::black_box(&image)).expect("inference"));
+    });
+    // The network's input size against its cost (eval-vision --sweep gives
+    // the error that goes with each).
+    for scale in [0.375, 0.75] {
+        net.input_scale = scale;
+        c.bench_function(
+            &format!("network mask 640x480 at input scale {scale}"),
+            |b| {
+                b.iter(|| net.mask(std::hint::black_box(&image)).expect("inference"));
+            },
+        );
+    }
+    net.input_scale = DEFAULT_INPUT_SCALE;
+    // Image in, grasp frames out, as the detector runs it.
+    let mut pipeline = Pipeline::new(VisionConfig {
+        mask: MaskMethod::Network,
+        ..VisionConfig::default()
+    });
+    c.bench_function("whole pipeline 640x480 (network mask, skeleton)", |b| {
+        b.iter(|| {
+            pipeline
+                .detect(
+                    std::hint::black_box(&image),
+                    Some(&mut net as &mut dyn MaskNetwork),
+                )
+                .expect("detect")
+        });
     });
 }
 

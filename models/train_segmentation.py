@@ -14,11 +14,10 @@ Data:
   and Di Stefano, from "Let's take a Walk on Superpixels Graphs: Deformable
   Linear Objects Segmentation and Model Estimation", arXiv 1810.04461).
   Images 00000..00029 train; 00030..00044 are held out and only measured.
-- synthetic images made here: smooth random curves of random colours and
-  widths drawn with anti-aliased thick polylines over plain colours,
-  gradients, noise textures, stripes, checkers, printed-like patterns and
-  wood-like textures, under random lighting and noise. Their masks are exact
-  by construction.
+- synthetic images from the project's renderer (src/sim/render/), written
+  by `cablecell render-dataset` in the same layout: shaded tubes over plain
+  and cluttered backgrounds (noise, stripes, checkers, wood, print), with
+  crossings, light, blur and noise. Their masks are exact by construction.
 
 The exported model's contract (what Rust must do) is in models/README.md:
 input `bgr`, float32, shape [1, H, W, 3] (NHWC), the image's B, G, R
@@ -26,17 +25,18 @@ values as they are (0..255, no scaling: the model normalises inside); H and
 W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
 [0, 1].
 
-Run:
+Run (from the project's root):
+    cargo run --release -- render-dataset target/render-train --count 2000 --seed 11
     python3 -m venv .venv-train
     .venv-train/bin/pip install -r models/requirements.txt
-    .venv-train/bin/python models/train_segmentation.py --out models/cable_segmentation.onnx
+    nice .venv-train/bin/python models/train_segmentation.py \
+        --synthetic target/render-train --out models/cable_segmentation.onnx
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import random
 import sys
@@ -132,162 +132,6 @@ class CableNet(nn.Module):
 
 
 # --------------------------------------------------------------------------
-# Synthetic images
-# --------------------------------------------------------------------------
-
-
-def _smooth_noise(rng: np.random.Generator, h: int, w: int, scale: float) -> np.ndarray:
-    """Noise in [0, 1] with features about `scale` pixels across."""
-    sh, sw = max(2, int(h / scale)), max(2, int(w / scale))
-    small = rng.random((sh, sw)).astype(np.float32)
-    big = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
-    lo, hi = float(big.min()), float(big.max())
-    return (big - lo) / max(hi - lo, 1e-6)
-
-
-def _random_colour(rng: np.random.Generator, sat_lo: int = 0) -> np.ndarray:
-    hsv = np.uint8([[[rng.integers(0, 180), rng.integers(sat_lo, 256), rng.integers(20, 256)]]])
-    return cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0, 0].astype(np.float32)
-
-
-def _background(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
-    kind = rng.integers(0, 7)
-    c1 = _random_colour(rng)
-    c2 = _random_colour(rng)
-    if rng.random() < 0.5:  # pale, like paper, cloth and table tops
-        c1 = 255 - (255 - c1) * rng.uniform(0.1, 0.5)
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-    if kind == 0:  # plain
-        t = np.zeros((h, w), np.float32)
-    elif kind == 1:  # linear gradient
-        a = rng.uniform(0, 2 * math.pi)
-        t = (xx * math.cos(a) + yy * math.sin(a))
-        t = (t - t.min()) / max(float(t.max() - t.min()), 1e-6)
-    elif kind == 2:  # noise texture
-        t = _smooth_noise(rng, h, w, rng.uniform(3, 60))
-    elif kind == 3:  # stripes
-        a = rng.uniform(0, math.pi)
-        period = rng.uniform(6, 60)
-        t = (np.sin((xx * math.cos(a) + yy * math.sin(a)) * 2 * math.pi / period) > rng.uniform(-0.5, 0.5)).astype(np.float32)
-    elif kind == 4:  # checker
-        p = rng.uniform(8, 60)
-        t = ((np.floor(xx / p) + np.floor(yy / p)) % 2).astype(np.float32)
-    elif kind == 5:  # wood: rings distorted by low-frequency noise
-        a = rng.uniform(0, math.pi)
-        u = xx * math.cos(a) + yy * math.sin(a)
-        warp = _smooth_noise(rng, h, w, rng.uniform(40, 160)) * rng.uniform(10, 60)
-        period = rng.uniform(4, 20)
-        t = 0.5 + 0.5 * np.sin((u + warp) * 2 * math.pi / period)
-        t = t ** rng.uniform(1, 4)
-        c1 = np.float32([rng.uniform(120, 200), rng.uniform(170, 225), rng.uniform(200, 250)])
-        c2 = c1 * rng.uniform(0.6, 0.9)
-    else:  # printed-like: blocks, circles, text, thin straight lines
-        t = np.zeros((h, w), np.float32)
-    c1 = c1.reshape(1, 1, 3)
-    c2 = c2.reshape(1, 1, 3)
-    if kind != 0:
-        contrast = rng.uniform(0.05, 1.0)
-        c2 = c1 + (c2 - c1) * contrast
-    img = c1 * (1 - t[..., None]) + c2 * t[..., None]
-    img = np.ascontiguousarray(img, dtype=np.float32)
-    if kind == 6 or rng.random() < 0.2:
-        for _ in range(rng.integers(1, 12)):
-            col = tuple(float(v) for v in _random_colour(rng))
-            shape = rng.integers(0, 4)
-            x0, y0 = int(rng.integers(0, w)), int(rng.integers(0, h))
-            if shape == 0:
-                cv2.rectangle(img, (x0, y0), (x0 + int(rng.integers(5, 120)), y0 + int(rng.integers(5, 90))), col, -1)
-            elif shape == 1:
-                cv2.circle(img, (x0, y0), int(rng.integers(3, 40)), col, -1, cv2.LINE_AA)
-            elif shape == 2:
-                text = "".join(chr(int(c)) for c in rng.integers(65, 91, rng.integers(3, 10)))
-                ink = np.zeros((h, w), np.uint8)  # putText draws on 8-bit images only
-                cv2.putText(ink, text, (x0, y0), int(rng.integers(0, 8)), rng.uniform(0.3, 1.5), 255, int(rng.integers(1, 3)), cv2.LINE_AA)
-                a = ink.astype(np.float32)[..., None] / 255
-                img[:] = img * (1 - a) + np.float32(col) * a
-            else:  # straight edges and rulers are not cables
-                x1, y1 = int(rng.integers(0, w)), int(rng.integers(0, h))
-                cv2.line(img, (x0, y0), (x1, y1), col, int(rng.integers(1, 4)), cv2.LINE_AA)
-    return img
-
-
-def _curve(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
-    """A smooth random curve: a walk whose curvature drifts slowly, like a
-    bent wire. Returns N x 2 float points (x, y)."""
-    x, y = rng.uniform(-0.1 * w, 1.1 * w), rng.uniform(-0.1 * h, 1.1 * h)
-    a = rng.uniform(0, 2 * math.pi)
-    length = rng.uniform(0.3, 1.4) * max(w, h)
-    step = 2.0
-    k = rng.normal(0, 0.02)
-    pts = []
-    for _ in range(int(length / step)):
-        pts.append((x, y))
-        k = 0.97 * k + rng.normal(0, 0.004)
-        k = float(np.clip(k, -0.06, 0.06))
-        a += k * step
-        x += step * math.cos(a)
-        y += step * math.sin(a)
-    return np.array(pts, np.float32)
-
-
-def _draw_cable(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, width: float) -> None:
-    pts = _curve(rng, *img.shape[:2])
-    if len(pts) < 4:
-        return
-    shift = 4
-    ipts = [np.round(pts * (1 << shift)).astype(np.int32).reshape(-1, 1, 2)]
-    t = max(1, int(round(width)))
-    colour = _random_colour(rng, sat_lo=rng.choice([0, 80]))
-    # a soft shadow under the cable
-    if rng.random() < 0.6:
-        shadow = np.zeros(img.shape[:2], np.float32)
-        off = rng.normal(0, 1.2, 2) * (1 << shift)
-        cv2.polylines(shadow, [ipts[0] + off.astype(np.int32)], False, 1.0, t + 2, cv2.LINE_AA, shift)
-        shadow = cv2.GaussianBlur(shadow, (0, 0), rng.uniform(0.8, 2.5))
-        img *= (1 - rng.uniform(0.1, 0.45) * shadow)[..., None]
-    layer = np.zeros(img.shape[:2], np.float32)
-    cv2.polylines(layer, ipts, False, 1.0, t, cv2.LINE_AA, shift)
-    body = np.empty_like(img)
-    body[:] = colour
-    # tube shading: a darker rim and a lighter highlight along the middle
-    if t >= 2 and rng.random() < 0.8:
-        core = np.zeros(img.shape[:2], np.float32)
-        cv2.polylines(core, ipts, False, 1.0, max(1, t // 2), cv2.LINE_AA, shift)
-        rim = rng.uniform(0.55, 0.95)
-        light = rng.uniform(1.0, 1.4)
-        body = body * (rim + (light - rim) * core[..., None])
-    img[:] = img * (1 - layer[..., None]) + body * layer[..., None]
-    cv2.polylines(mask, ipts, False, 1.0, t, cv2.LINE_8, shift)
-    # metal ferrules at the ends, as on the real wires (part of the wire)
-    if rng.random() < 0.5:
-        for end in (pts[:6], pts[-6:]):
-            e = [np.round(end * (1 << shift)).astype(np.int32).reshape(-1, 1, 2)]
-            grey = float(rng.uniform(120, 240))
-            cv2.polylines(img, e, False, (grey, grey, grey), t, cv2.LINE_AA, shift)
-
-
-def synthetic_sample(rng: np.random.Generator, h: int = NET_H, w: int = NET_W) -> tuple[np.ndarray, np.ndarray]:
-    """A synthetic BGR image (uint8) and its exact cable mask (float 0/1)."""
-    img = _background(rng, h, w)
-    mask = np.zeros((h, w), np.float32)
-    base_width = rng.uniform(2.0, 5.0)
-    for _ in range(rng.integers(1, 8)):
-        _draw_cable(rng, img, mask, base_width * rng.uniform(0.8, 1.25))
-    # lighting: a smooth multiplicative field and a colour cast
-    light = 1 + (_smooth_noise(rng, h, w, rng.uniform(80, 300)) - 0.5) * rng.uniform(0, 0.8)
-    img *= light[..., None] * rng.uniform(0.85, 1.15, 3).astype(np.float32) * rng.uniform(0.6, 1.2)
-    if rng.random() < 0.5:
-        img = cv2.GaussianBlur(img, (0, 0), rng.uniform(0.3, 1.0))
-    img += rng.normal(0, rng.uniform(0, 8), img.shape).astype(np.float32)
-    out = np.clip(img, 0, 255).astype(np.uint8)
-    if rng.random() < 0.5:
-        ok, enc = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(rng.integers(40, 95))])
-        if ok:
-            out = cv2.imdecode(enc, cv2.IMREAD_COLOR)
-    return out, mask
-
-
-# --------------------------------------------------------------------------
 # Real images
 # --------------------------------------------------------------------------
 
@@ -295,12 +139,18 @@ def synthetic_sample(rng: np.random.Generator, h: int = NET_H, w: int = NET_W) -
 def load_real(data: Path, ids: list[int], size: tuple[int, int] | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Images (BGR uint8) and union masks (float 0..1), resized to `size`
     (w, h) with area averaging if given, else at full resolution (masks 0/1)."""
+    return load_stems(data, [f"{i:05d}" for i in ids], size)
+
+
+def load_stems(data: Path, stems: list[str], size: tuple[int, int] | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """`load_real` for the images `STEM.jpg` with `STEM_mask_all.png` of a
+    folder in the cables-dev layout."""
     images, masks = [], []
-    for i in ids:
-        img = cv2.imread(str(data / f"{i:05d}.jpg"), cv2.IMREAD_COLOR)
-        m = cv2.imread(str(data / f"{i:05d}_mask_all.png"), cv2.IMREAD_GRAYSCALE)
+    for stem in stems:
+        img = cv2.imread(str(data / f"{stem}.jpg"), cv2.IMREAD_COLOR)
+        m = cv2.imread(str(data / f"{stem}_mask_all.png"), cv2.IMREAD_GRAYSCALE)
         if img is None or m is None:
-            raise FileNotFoundError(f"{data}: image or mask {i:05d} missing")
+            raise FileNotFoundError(f"{data}: image or mask {stem} missing")
         m = (m > 127).astype(np.float32)
         if size is not None:
             img = cv2.resize(img, size, interpolation=cv2.INTER_AREA)
@@ -308,6 +158,18 @@ def load_real(data: Path, ids: list[int], size: tuple[int, int] | None) -> tuple
         images.append(img)
         masks.append(m)
     return images, masks
+
+
+def load_synthetic(folder: Path, limit: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The first `limit` images of a folder written by `cablecell
+    render-dataset`, at the network's size."""
+    stems = sorted(p.stem for p in folder.glob("*.jpg"))[:limit]
+    if not stems:
+        raise FileNotFoundError(
+            f"{folder}: no rendered images; make them with "
+            f"`cablecell render-dataset {folder} --count 2000 --seed 11`"
+        )
+    return load_stems(folder, stems, (NET_W, NET_H))
 
 
 def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int) -> tuple[np.ndarray, np.ndarray]:
@@ -382,9 +244,7 @@ def train(args) -> CableNet:
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
     real_imgs, real_masks = load_real(args.data, TRAIN_IDS, (NET_W, NET_H))
-    synth = [synthetic_sample(rng) for _ in range(args.synthetic)]
-    synth_imgs = [s[0] for s in synth]
-    synth_masks = [s[1] for s in synth]
+    synth_imgs, synth_masks = load_synthetic(args.synthetic, args.synthetic_count)
     print(f"data: {len(real_imgs)} real, {len(synth_imgs)} synthetic in {time.time() - t0:.1f} s", flush=True)
 
     model = CableNet().to(memory_format=torch.channels_last)
@@ -498,20 +358,26 @@ def main() -> int:
                         help="the cables-dev folder (default: ../shared/data/cables-dev from the project's root)")
     parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx")
     parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--steps", type=int, default=2400)
-    parser.add_argument("--batch", type=int, default=16)
-    parser.add_argument("--crop", type=int, default=160, help="side of the square training crops, in network pixels")
+    parser.add_argument("--steps", type=int, default=450)
+    parser.add_argument("--batch", type=int, default=8)
+    parser.add_argument("--crop", type=int, default=128, help="side of the square training crops, in network pixels")
     parser.add_argument("--lr", type=float, default=4e-3)
-    parser.add_argument("--synthetic", type=int, default=1500, help="synthetic images generated up front")
+    parser.add_argument("--synthetic", type=Path, help="a folder written by `cablecell render-dataset` (required to train)")
+    parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--eval-only", action="store_true", help="measure an existing --out model")
     args = parser.parse_args()
 
     torch.set_num_threads(args.threads)
+    cv2.setNumThreads(1)  # augmentation runs between torch's steps, not beside them
     seed_everything(args.seed)
     if not args.data.is_dir():
         print(f"no data at {args.data}", file=sys.stderr)
+        return 2
+    if not args.eval_only and (args.synthetic is None or not args.synthetic.is_dir()):
+        print(f"no rendered images at {args.synthetic}: pass --synthetic DIR, made by "
+              "`cablecell render-dataset DIR --count 2000 --seed 11`", file=sys.stderr)
         return 2
     t0 = time.time()
     if not args.eval_only:

@@ -148,13 +148,11 @@ enum Command {
     },
     /// Score the vision pipeline on a folder laid out like cables-dev
     /// (NNNNN.jpg, NNNNN_mask_K.png, NNNNN_mask_all.png, NNNNN.txt).
-    EvalVision {
-        dir: PathBuf,
-        #[command(flatten)]
-        vision: cli::vision_io::VisionArgs,
-        #[arg(long)]
-        json: bool,
-    },
+    EvalVision(cli::eval_vision::EvalVisionArgs),
+    /// Render synthetic images of cables with exact masks and centre lines,
+    /// in the layout of cables-dev (training data for the network, test
+    /// data for eval-vision).
+    RenderDataset(cli::render_dataset::RenderDatasetArgs),
     /// Talk to one device and print what it answered: the first thing to
     /// run when bringing up a cell.
     Device {
@@ -301,9 +299,8 @@ fn main() -> ExitCode {
             speed_mm_s,
             dry_run,
         } => cli::calibrate_camera::calibrate_camera(&cell, seed, speed_mm_s, dry_run),
-        Command::EvalVision { dir, vision, json } => {
-            cli::eval_vision::eval_vision(&dir, &vision, json)
-        }
+        Command::EvalVision(args) => cli::eval_vision::eval_vision(&args),
+        Command::RenderDataset(args) => cli::render_dataset::render_dataset(&args),
         Command::Device { device } => match device {
             DeviceCommand::Gripper {
                 port,

@@ -1,15 +1,38 @@
-//! `cablecell eval-vision DIR`
+//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep]`
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::MaskNetwork;
 use cablecell::perception::vision::eval::{GroundTruth, ImageScore, score};
+use clap::Args;
+use opencv::core::Mat;
 use serde::Serialize;
 
 use super::Status;
-use super::vision_io::{VisionArgs, read_image};
+use super::vision_io::{InstancesArg, MaskArg, VisionArgs, read_image};
+
+#[derive(Args, Debug, Clone)]
+pub struct EvalVisionArgs {
+    pub dir: PathBuf,
+    #[command(flatten)]
+    pub vision: VisionArgs,
+    /// Score only images whose name sorts at or after this, e.g. 00030.
+    #[arg(long)]
+    pub from: Option<String>,
+    /// Score only images whose name sorts at or before this, e.g. 00044.
+    #[arg(long)]
+    pub to: Option<String>,
+    /// Score the main settings (mask method, network input size, instance
+    /// method, superpixel size) one after another and print a table of run
+    /// time against error; the other vision options set what a row does
+    /// not.
+    #[arg(long)]
+    pub sweep: bool,
+    #[arg(long)]
+    pub json: bool,
+}
 
 #[derive(Serialize)]
 struct Evaluation {
@@ -25,47 +48,110 @@ struct Evaluation {
     per_image: Vec<(String, ImageScore)>,
 }
 
-pub fn eval_vision(dir: &Path, args: &VisionArgs, json: bool) -> Status {
-    let stems = match image_stems(dir) {
-        Ok(stems) if !stems.is_empty() => stems,
-        Ok(_) => {
-            eprintln!(
-                "error: {}: no NNNNN.jpg images with NNNNN_mask_all.png beside them",
-                dir.display()
-            );
-            return Status::BadInput;
-        }
-        Err(error) => {
-            eprintln!("error: {}: cannot list the folder: {error}", dir.display());
+/// An image with its ground truth, read once for all settings.
+struct Sample {
+    stem: String,
+    path: PathBuf,
+    image: Mat,
+    truth: GroundTruth,
+}
+
+pub fn eval_vision(args: &EvalVisionArgs) -> Status {
+    let samples = match load_samples(args) {
+        Ok(samples) => samples,
+        Err(message) => {
+            eprintln!("error: {message}");
             return Status::BadInput;
         }
     };
-    let mut pipeline = args.pipeline();
-    let mut network = args.network();
+    if args.sweep {
+        return sweep(args, &samples);
+    }
+    let evaluation = match evaluate(&args.vision, &samples) {
+        Ok(evaluation) => evaluation,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return Status::TaskFailed;
+        }
+    };
+    if args.json {
+        print_json(&evaluation)
+    } else {
+        print_evaluation(&args.dir, &evaluation);
+        Status::Success
+    }
+}
+
+fn print_json(value: &impl Serialize) -> Status {
+    match serde_json::to_string_pretty(value) {
+        Ok(text) => {
+            println!("{text}");
+            Status::Success
+        }
+        Err(error) => {
+            eprintln!("error: cannot write the evaluation as JSON: {error}");
+            Status::OutputFailed
+        }
+    }
+}
+
+/// The selected images of the folder and their truth, or what is wrong.
+fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, String> {
+    let dir = &args.dir;
+    let stems = image_stems(dir)
+        .map_err(|error| format!("{}: cannot list the folder: {error}", dir.display()))?;
+    let selected: Vec<_> = stems
+        .into_iter()
+        .filter(|(stem, _)| args.from.as_ref().is_none_or(|from| stem >= from))
+        .filter(|(stem, _)| args.to.as_ref().is_none_or(|to| stem <= to))
+        .collect();
+    if selected.is_empty() {
+        return Err(format!(
+            "{}: no NNNNN.jpg images with NNNNN_mask_all.png beside them{}",
+            dir.display(),
+            match (&args.from, &args.to) {
+                (None, None) => String::new(),
+                (from, to) => format!(
+                    " between {} and {}",
+                    from.as_deref().unwrap_or("the first"),
+                    to.as_deref().unwrap_or("the last")
+                ),
+            }
+        ));
+    }
+    selected
+        .into_iter()
+        .map(|(stem, path)| {
+            let image = read_image(&path)?;
+            let truth = GroundTruth::load(dir, &stem)
+                .map_err(|error| format!("{}: {stem}: {error}", dir.display()))?;
+            Ok(Sample {
+                stem,
+                path,
+                image,
+                truth,
+            })
+        })
+        .collect()
+}
+
+/// Runs the pipeline configured by `vision` on every sample and scores it.
+/// The first image is run once untimed before the loop, so that loading
+/// the network and first-use allocations are not counted as its time.
+fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, String> {
+    let mut pipeline = vision.pipeline();
+    let mut network = vision.network();
     let mut per_image = Vec::new();
     let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
-    for (stem, image_path) in &stems {
-        let image = match read_image(image_path) {
-            Ok(image) => image,
-            Err(error) => {
-                eprintln!("error: {error}");
-                return Status::BadInput;
-            }
-        };
-        let truth = match GroundTruth::load(dir, stem) {
-            Ok(truth) => truth,
-            Err(error) => {
-                eprintln!("error: {}: {stem}: {error}", dir.display());
-                return Status::BadInput;
-            }
-        };
-        let output = match pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork)) {
-            Ok(output) => output,
-            Err(error) => {
-                eprintln!("error: {}: {error}", image_path.display());
-                return Status::TaskFailed;
-            }
-        };
+    for (k, sample) in samples.iter().enumerate() {
+        if k == 0 {
+            pipeline
+                .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
+                .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+        }
+        let output = pipeline
+            .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
+            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
         for (stage, ms) in &output.timings_ms {
             stage_ms.entry(stage).or_default().push(*ms);
         }
@@ -73,7 +159,7 @@ pub fn eval_vision(dir: &Path, args: &VisionArgs, json: bool) -> Status {
             .entry("total")
             .or_default()
             .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
-        per_image.push((stem.clone(), score(&output, &truth)));
+        per_image.push((sample.stem.clone(), score(&output, &sample.truth)));
     }
     let of = |f: &dyn Fn(&ImageScore) -> Option<f64>| {
         Summary::of(
@@ -83,7 +169,7 @@ pub fn eval_vision(dir: &Path, args: &VisionArgs, json: bool) -> Status {
                 .collect::<Vec<_>>(),
         )
     };
-    let evaluation = Evaluation {
+    Ok(Evaluation {
         images: per_image.len(),
         union_iou: of(&|s| Some(s.union_iou)),
         union_dice: of(&|s| Some(s.union_dice)),
@@ -99,17 +185,109 @@ pub fn eval_vision(dir: &Path, args: &VisionArgs, json: bool) -> Status {
             .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))
             .collect(),
         per_image,
+    })
+}
+
+/// One row of the sweep: what it changes and what it scored.
+#[derive(Serialize)]
+struct SweepRow {
+    setting: String,
+    total_ms_median: Option<f64>,
+    total_ms_p95: Option<f64>,
+    union_dice: Option<f64>,
+    count_right: Option<f64>,
+    grasp_error_px_mean: Option<f64>,
+    grasp_error_px_median: Option<f64>,
+    centerline_px: Option<f64>,
+}
+
+/// The settings the sweep compares: the mask method, the network's input
+/// size, the instance method and the superpixels' size, each varied from
+/// the command line's settings.
+fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
+    let with = |change: &dyn Fn(&mut VisionArgs)| {
+        let mut args = base.clone();
+        change(&mut args);
+        args
     };
-    if json {
-        match serde_json::to_string_pretty(&evaluation) {
-            Ok(text) => println!("{text}"),
-            Err(error) => {
-                eprintln!("error: cannot write the evaluation as JSON: {error}");
-                return Status::OutputFailed;
+    let mut settings = vec![(
+        "classical mask, skeleton".to_owned(),
+        with(&|a| {
+            a.mask = MaskArg::Classical;
+            a.instances = InstancesArg::Skeleton;
+        }),
+    )];
+    for scale in [0.375, 0.5, 0.75] {
+        settings.push((
+            format!("network at {scale}×, skeleton"),
+            with(&|a| {
+                a.mask = MaskArg::Network;
+                a.net_scale = scale;
+                a.instances = InstancesArg::Skeleton;
+            }),
+        ));
+    }
+    for widths in [1.5, 2.0, 3.0] {
+        settings.push((
+            format!(
+                "network at {}×, superpixels {widths} widths",
+                base.net_scale
+            ),
+            with(&|a| {
+                a.mask = MaskArg::Network;
+                a.instances = InstancesArg::Superpixels;
+                a.superpixel_widths = widths;
+            }),
+        ));
+    }
+    settings
+}
+
+fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
+    let mut rows = Vec::new();
+    for (setting, vision) in sweep_settings(&args.vision) {
+        let evaluation = match evaluate(&vision, samples) {
+            Ok(evaluation) => evaluation,
+            Err(message) => {
+                eprintln!("error: {setting}: {message}");
+                return Status::TaskFailed;
             }
-        }
-    } else {
-        print_evaluation(dir, &evaluation);
+        };
+        let total = evaluation.stage_ms.get("total");
+        rows.push(SweepRow {
+            setting,
+            total_ms_median: total.map(|s| s.median),
+            total_ms_p95: total.map(|s| s.p95),
+            union_dice: evaluation.union_dice.map(|s| s.mean),
+            count_right: evaluation.count_right.map(|r| r.rate),
+            grasp_error_px_mean: evaluation.grasp_error_px.as_ref().map(|s| s.mean),
+            grasp_error_px_median: evaluation.grasp_error_px.as_ref().map(|s| s.median),
+            centerline_px: evaluation.centerline_px.map(|s| s.mean),
+        });
+    }
+    if args.json {
+        return print_json(&rows);
+    }
+    println!("{}: {} images", args.dir.display(), samples.len());
+    println!(
+        "| setting | median ms | p95 ms | union DICE | count right | grasp px mean | grasp px median | centre line px |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let cell =
+        |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
+    for row in &rows {
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            row.setting,
+            cell(row.total_ms_median, 1),
+            cell(row.total_ms_p95, 1),
+            cell(row.union_dice, 3),
+            row.count_right
+                .map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r)),
+            cell(row.grasp_error_px_mean, 1),
+            cell(row.grasp_error_px_median, 1),
+            cell(row.centerline_px, 1),
+        );
     }
     Status::Success
 }
@@ -151,7 +329,7 @@ fn print_evaluation(dir: &Path, e: &Evaluation) {
 }
 
 /// (stem, image path) of every image with a union mask beside it, sorted.
-fn image_stems(dir: &Path) -> std::io::Result<Vec<(String, std::path::PathBuf)>> {
+fn image_stems(dir: &Path) -> std::io::Result<Vec<(String, PathBuf)>> {
     let mut stems = Vec::new();
     for entry in std::fs::read_dir(dir)? {
         let path = entry?.path();

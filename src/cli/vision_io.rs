@@ -4,7 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use cablecell::perception::vision::network::{LazyNetwork, runtime_library};
+use cablecell::perception::vision::network::{
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, runtime_library,
+};
+use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
 use clap::Args;
 use opencv::core::Mat;
@@ -26,6 +29,40 @@ pub struct VisionArgs {
     /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else .setup/onnxruntime/).
     #[arg(long)]
     pub onnxruntime: Option<PathBuf>,
+    /// The network's probability above which a pixel is cable.
+    #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = probability)]
+    pub threshold: f32,
+    /// The network's input size as a fraction of the image's (0.5: 320×240
+    /// for 640×480; smaller is faster).
+    #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
+    pub net_scale: f64,
+    /// Superpixel side in cable widths, for `--instances superpixels`
+    /// (smaller: more superpixels).
+    #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
+    pub superpixel_widths: f64,
+}
+
+fn number_in(text: &str, low: f64, high: f64) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if value > low && value <= high {
+        Ok(value)
+    } else {
+        Err(format!("{value} is outside ({low}, {high}]"))
+    }
+}
+
+fn probability(text: &str) -> Result<f32, String> {
+    number_in(text, 0.0, 1.0).map(|v| v as f32)
+}
+
+fn input_scale(text: &str) -> Result<f64, String> {
+    number_in(text, 0.0, 2.0)
+}
+
+fn region_widths(text: &str) -> Result<f64, String> {
+    number_in(text, 0.0, 20.0)
 }
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
@@ -53,6 +90,7 @@ impl VisionArgs {
                 InstancesArg::Skeleton => InstanceMethod::Skeleton,
                 InstancesArg::Superpixels => InstanceMethod::Superpixels,
             },
+            superpixel_widths: self.superpixel_widths,
             ..VisionConfig::default()
         };
         Pipeline::new(config)
@@ -63,6 +101,7 @@ impl VisionArgs {
             self.model.clone(),
             runtime_library(self.onnxruntime.as_deref()),
         )
+        .tuned(self.threshold, self.net_scale)
     }
 }
 

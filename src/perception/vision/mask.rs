@@ -2,8 +2,11 @@
 //! threshold on a plain background, and the network's mask made binary.
 //!
 //! The classical mask measures each pixel's colour distance (CIELAB, 8-bit
-//! units) from the background's colour, estimated as the image's median
-//! colour: cables are thin, so on a plain table most pixels are table. Otsu
+//! units) from the background's colour: on a plain background the image's
+//! median colour, otherwise (a gradient, uneven light, a busy table) the
+//! median colour of the pixel's neighbourhood, a window several cable
+//! widths across. Cables are thin, so most pixels are table, near any
+//! cable too. Otsu
 //! on that distance splits cable from table, morphology cleans the edge and
 //! blobs too small to be cable are dropped.
 
@@ -34,6 +37,13 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 /// plain. Cables rarely cover more than 15% of a view; on the cables-dev
 /// photographs (wood, cloth, prints) the fraction ranges well below this.
 pub const PLAIN_MIN_FRACTION: f64 = 0.8;
+
+/// Side, in pixels of the image shrunk by [`STATS_DOWNSCALE`], of the
+/// window whose median colour is the local background: 15 (60 px at full
+/// size) is several widths of the thickest cable, so the median is the
+/// table's even beside a cable, and small against a gradient or a light's
+/// falloff.
+const LOCAL_BACKGROUND_KSIZE: i32 = 15;
 
 /// The lowest colour distance the classical threshold may take, whatever
 /// Otsu says: below it two shades of one plain table would be split.
@@ -172,6 +182,34 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
     })
 }
 
+/// The background's colour at every pixel (8-bit CIELAB, the image's
+/// size): the median of a window around it (see
+/// [`LOCAL_BACKGROUND_KSIZE`]), on a shrunk copy and scaled back up.
+fn local_background_lab(bgr: &Mat) -> Result<Mat, VisionError> {
+    let small_size = Size::new(
+        (bgr.cols() / STATS_DOWNSCALE).max(1),
+        (bgr.rows() / STATS_DOWNSCALE).max(1),
+    );
+    let mut small = Mat::default();
+    imgproc::resize(bgr, &mut small, small_size, 0.0, 0.0, imgproc::INTER_AREA)
+        .map_err(cv("downscale for the local background"))?;
+    let lab = blurred_lab(&small)?;
+    let mut median = Mat::default();
+    imgproc::median_blur(&lab, &mut median, LOCAL_BACKGROUND_KSIZE)
+        .map_err(cv("median of the local background"))?;
+    let mut full = Mat::default();
+    imgproc::resize(
+        &median,
+        &mut full,
+        bgr.size().map_err(cv("image size"))?,
+        0.0,
+        0.0,
+        imgproc::INTER_LINEAR,
+    )
+    .map_err(cv("upscale the local background"))?;
+    continuous(&full)
+}
+
 /// The classical mask (CV_8U, 0/255, the image's size) and what it learnt
 /// about the background. `min_blob_area_px`: connected blobs smaller than
 /// this are dropped as noise.
@@ -182,11 +220,25 @@ pub fn classical_mask(
     let mut stats = background_stats(bgr)?;
     let lab = blurred_lab(bgr)?;
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
-    let bg = stats.background_lab;
-    let distance: Vec<u8> = bytes
-        .chunks_exact(3)
-        .map(|px| lab_distance(px, bg).round().min(255.0) as u8)
-        .collect();
+    let to_byte = |d: f64| d.round().min(255.0) as u8;
+    let distance: Vec<u8> = if stats.plain {
+        let bg = stats.background_lab;
+        bytes
+            .chunks_exact(3)
+            .map(|px| to_byte(lab_distance(px, bg)))
+            .collect()
+    } else {
+        let local = local_background_lab(bgr)?;
+        let local_bytes = local.data_bytes().map_err(cv("read Lab pixels"))?;
+        bytes
+            .chunks_exact(3)
+            .zip(local_bytes.chunks_exact(3))
+            .map(|(px, bg)| {
+                let bg = [f64::from(bg[0]), f64::from(bg[1]), f64::from(bg[2])];
+                to_byte(lab_distance(px, bg))
+            })
+            .collect()
+    };
     let distance_mat = Mat::new_rows_cols_with_data(bgr.rows(), bgr.cols(), &distance)
         .map_err(cv("wrap colour distance"))?;
     let mut scratch = Mat::default();

@@ -52,6 +52,9 @@ pub struct VisionConfig {
     /// Points sampled along each spline at uniform s (for display and
     /// scoring).
     pub samples_per_cable: usize,
+    /// Superpixel side in cable widths for [`InstanceMethod::Superpixels`]
+    /// (smaller: more superpixels, slower).
+    pub superpixel_widths: f64,
 }
 
 impl Default for VisionConfig {
@@ -63,6 +66,7 @@ impl Default for VisionConfig {
             min_cable_length_px: 40.0,
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
+            superpixel_widths: super::superpixels::DEFAULT_REGION_WIDTHS,
         }
     }
 }
@@ -278,6 +282,7 @@ impl Pipeline {
                 image_roi,
                 mask_roi,
                 self.config.min_cable_length_px,
+                self.config.superpixel_widths,
             )?,
         };
         timings_ms.push(("instances", ms_since(start)));

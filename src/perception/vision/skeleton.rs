@@ -11,7 +11,9 @@
 //! thin into two 3-way junctions rather than one 4-way one. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least: a cable goes straight through a crossing. Walking edges and
-//! pairings from end to end gives one pixel path per cable.
+//! pairings from end to end gives one pixel path per cable. Last, paths
+//! whose ends face each other across a short gap are joined (a mask broken
+//! at a ferrule or a glint), for the superpixel method's paths too.
 
 use std::collections::HashMap;
 
@@ -44,6 +46,20 @@ const SPLIT_CONTINUE_RAD: f64 = 0.6;
 /// (the cable ends there). Two branches are joined rather than both left
 /// unpaired when their bend is under twice this (about 140°).
 const UNPAIRED_COST_RAD: f64 = 1.2;
+/// Two paths whose ends lie at most this many cable widths (plus
+/// [`JOIN_GAP_EXTRA_PX`]) apart, and continue each other, are one cable
+/// broken by a gap in the mask: at a ferrule, a glint, a shadow, or where
+/// a crossing was resolved wrongly.
+const JOIN_GAP_WIDTHS: f64 = 4.0;
+const JOIN_GAP_EXTRA_PX: f64 = 4.0;
+/// Paths continue each other when neither end, nor the step between them,
+/// turns by more than this.
+const JOIN_MAX_BEND_RAD: f64 = 0.45;
+/// An end's direction is taken over this many cable widths of its path
+/// (at least [`JOIN_TANGENT_MIN_PX`]): long enough to ignore the ragged
+/// last pixels, short enough to follow a bend.
+const JOIN_TANGENT_WIDTHS: f64 = 2.0;
+const JOIN_TANGENT_MIN_PX: f64 = 8.0;
 /// Above this many branches at one junction the exact least-bending pairing
 /// is too costly and pairs are taken greedily, straightest first.
 const MAX_EXACT_BRANCHES: usize = 8;
@@ -576,6 +592,127 @@ fn best_pairing(cost: &[Vec<f64>]) -> Vec<(usize, usize)> {
     best.1
 }
 
+/// The angle between two directions (not necessarily unit).
+fn angle_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let norms = a[0].hypot(a[1]) * b[0].hypot(b[1]);
+    if norms == 0.0 {
+        return 0.0;
+    }
+    ((a[0] * b[0] + a[1] * b[1]) / norms)
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
+/// The unit direction in which `points` leaves its last point, over about
+/// `span_px` of it; `None` for a path too short to say.
+fn end_direction(points: &[[f64; 2]], span_px: f64) -> Option<[f64; 2]> {
+    let end = *points.last()?;
+    let mut travelled = 0.0;
+    let mut from = end;
+    for w in points.windows(2).rev() {
+        travelled += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        from = w[0];
+        if travelled >= span_px {
+            break;
+        }
+    }
+    let (dx, dy) = (end[0] - from[0], end[1] - from[1]);
+    let norm = dx.hypot(dy);
+    (norm > 1.0).then(|| [dx / norm, dy / norm])
+}
+
+/// Joins paths that continue each other across a short gap (see
+/// [`JOIN_GAP_WIDTHS`]), best-aligned pair first, until no pair does.
+/// Each path's ends are looked at in both directions, so the result may
+/// run either way.
+pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<Vec<[f64; 2]>> {
+    let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
+    let span_px = (JOIN_TANGENT_WIDTHS * width_px).max(JOIN_TANGENT_MIN_PX);
+    loop {
+        // Every path's two ends: (path, reversed?, end point, outward direction).
+        let mut ends = Vec::new();
+        for (i, path) in paths.iter().enumerate() {
+            let mut backwards = path.clone();
+            backwards.reverse();
+            for (reversed, oriented) in [(false, path), (true, &backwards)] {
+                if let (Some(&point), Some(direction)) =
+                    (oriented.last(), end_direction(oriented, span_px))
+                {
+                    ends.push((i, reversed, point, direction));
+                }
+            }
+        }
+        let mut best: Option<(f64, usize, bool, usize, bool)> = None;
+        for &(i, ri, pa, da) in &ends {
+            for &(j, rj, pb, db) in &ends {
+                if i >= j {
+                    continue;
+                }
+                let gap = [pb[0] - pa[0], pb[1] - pa[1]];
+                let gap_px = gap[0].hypot(gap[1]);
+                if gap_px > max_gap_px {
+                    continue;
+                }
+                let onward = [-db[0], -db[1]];
+                let mut bend = angle_rad(da, onward);
+                if gap_px > 0.5 * width_px.max(2.0) {
+                    bend = bend.max(angle_rad(da, gap)).max(angle_rad(gap, onward));
+                }
+                if bend <= JOIN_MAX_BEND_RAD && best.is_none_or(|b| bend < b.0) {
+                    best = Some((bend, i, ri, j, rj));
+                }
+            }
+        }
+        let Some((_, i, ri, j, rj)) = best else {
+            return paths;
+        };
+        // Path i leaves through the joined end; path j enters through its.
+        let mut second = paths.swap_remove(j);
+        let first = &mut paths[i];
+        if ri {
+            first.reverse();
+        }
+        if !rj {
+            second.reverse();
+        }
+        first.extend(second);
+    }
+}
+
+/// The cables from pixel paths, whichever method found them: pieces that
+/// continue each other joined, each run from its end with the smaller
+/// (x, y) and kept if at least `min_length_px` long, sorted by their first
+/// point.
+pub(super) fn finish_paths(
+    paths: Vec<Vec<[f64; 2]>>,
+    width_px: f64,
+    min_length_px: f64,
+) -> Vec<CablePath> {
+    let paths = join_continuations(paths, width_px);
+
+    let mut out: Vec<CablePath> = paths
+        .into_iter()
+        .filter_map(|mut points_px| {
+            let (first, last) = (*points_px.first()?, *points_px.last()?);
+            if (last[0], last[1]) < (first[0], first[1]) {
+                points_px.reverse();
+            }
+            let length_px = polyline_length(&points_px);
+            (length_px >= min_length_px).then_some(CablePath {
+                points_px,
+                length_px,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        let (pa, pb) = (a.points_px[0], b.points_px[0]);
+        (pa[0], pa[1])
+            .partial_cmp(&(pb[0], pb[1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    out
+}
+
 /// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
 /// end to end, of at least `min_length_px`.
 pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, VisionError> {
@@ -695,29 +832,64 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     for lp in &graph.loops {
         paths.push(lp.iter().map(|&i| graph.grid.xy(i)).collect());
     }
-
-    let mut out: Vec<CablePath> = paths
-        .into_iter()
-        .filter_map(|mut points_px| {
-            let (first, last) = (*points_px.first()?, *points_px.last()?);
-            if (last[0], last[1]) < (first[0], first[1]) {
-                points_px.reverse();
-            }
-            let length_px = polyline_length(&points_px);
-            (length_px >= min_length_px).then_some(CablePath {
-                points_px,
-                length_px,
-            })
-        })
-        .collect();
-    out.sort_by(|a, b| {
-        let (pa, pb) = (a.points_px[0], b.points_px[0]);
-        (pa[0], pa[1])
-            .partial_cmp(&(pb[0], pb[1]))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
     Ok(FoundPaths {
-        paths: out,
+        paths: finish_paths(paths, width_px, min_length_px),
         width_px,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points a pixel apart from `from` to `to`.
+    fn line(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
+        let n = (to[0] - from[0]).hypot(to[1] - from[1]).round() as usize;
+        (0..=n)
+            .map(|i| {
+                let t = i as f64 / n as f64;
+                [
+                    from[0] + t * (to[0] - from[0]),
+                    from[1] + t * (to[1] - from[1]),
+                ]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn pieces_of_one_cable_across_a_gap_are_joined_in_order() {
+        // Given out of order and one of them backwards, 20 px apart, 8 px wide.
+        let pieces = vec![
+            line([200.0, 100.0], [120.0, 100.0]),
+            line([0.0, 100.0], [100.0, 100.0]),
+        ];
+        let joined = join_continuations(pieces, 8.0);
+        assert_eq!(joined.len(), 1);
+        let path = &joined[0];
+        assert_eq!(path.len(), 101 + 81);
+        // One direction throughout: x never steps back.
+        let steps: Vec<f64> = path.windows(2).map(|w| w[1][0] - w[0][0]).collect();
+        assert!(steps.iter().all(|&d| d > 0.0) || steps.iter().all(|&d| d < 0.0));
+    }
+
+    #[test]
+    fn ends_that_meet_at_an_angle_or_lie_far_apart_stay_separate() {
+        let corner = vec![
+            line([0.0, 100.0], [100.0, 100.0]),
+            line([110.0, 110.0], [110.0, 200.0]),
+        ];
+        assert_eq!(join_continuations(corner, 8.0).len(), 2);
+        let far = vec![
+            line([0.0, 100.0], [100.0, 100.0]),
+            line([150.0, 100.0], [250.0, 100.0]),
+        ];
+        assert_eq!(join_continuations(far, 8.0).len(), 2);
+        // Side by side, parallel: their ends are close, but one does not
+        // lead into the other.
+        let parallel = vec![
+            line([0.0, 100.0], [100.0, 100.0]),
+            line([105.0, 112.0], [200.0, 112.0]),
+        ];
+        assert_eq!(join_continuations(parallel, 8.0).len(), 2);
+    }
 }

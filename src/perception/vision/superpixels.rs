@@ -17,11 +17,12 @@ use opencv::ximgproc::{self, SuperpixelSLICTrait, SuperpixelSLICTraitConst};
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::skeleton::{CablePath, FoundPaths};
+use super::skeleton::{FoundPaths, finish_paths};
 
-/// Superpixel side, in cable widths: about two, so that a cable is one
-/// superpixel across and each node has a clear direction to its next.
-const REGION_WIDTHS: f64 = 2.0;
+/// Superpixel side, in cable widths, unless set otherwise: about two, so
+/// that a cable is one superpixel across and each node has a clear
+/// direction to its next. Smaller gives more superpixels.
+pub const DEFAULT_REGION_WIDTHS: f64 = 2.0;
 /// SLIC iterations: the centres settle within a few.
 const SLIC_ITERATIONS: i32 = 4;
 /// SLIC's compactness: high, so superpixels stay blob-shaped along the
@@ -189,11 +190,13 @@ fn width_px(mask: &Mat) -> Result<f64, VisionError> {
 }
 
 /// Finds the cables in `mask` (CV_8U, non-zero = cable) over `image` (same
-/// size, any channels) by walks on the superpixel graph.
+/// size, any channels) by walks on the superpixel graph, with superpixels
+/// `region_widths` cable widths across.
 pub fn paths_from_mask(
     image: &Mat,
     mask: &Mat,
     min_length_px: f64,
+    region_widths: f64,
 ) -> Result<FoundPaths, VisionError> {
     let width_px = width_px(mask)?;
     let empty = FoundPaths {
@@ -204,7 +207,7 @@ pub fn paths_from_mask(
     if bbox.width <= 0 || bbox.height <= 0 || width_px.is_nan() || width_px <= 0.0 {
         return Ok(empty);
     }
-    let region_px = (REGION_WIDTHS * width_px).round().max(4.0) as i32;
+    let region_px = (region_widths * width_px).round().max(4.0) as i32;
     let pad = region_px;
     let crop = Rect::new(
         bbox.x - pad,
@@ -239,34 +242,17 @@ pub fn paths_from_mask(
         for &n in &path {
             taken[n] = true;
         }
-        let mut points_px: Vec<[f64; 2]> = path
-            .iter()
-            .map(|&n| {
-                let c = nodes.centres_px[n];
-                [c[0] + offset[0], c[1] + offset[1]]
-            })
-            .collect();
-        if let (Some(first), Some(last)) = (points_px.first().copied(), points_px.last().copied())
-            && (last[0], last[1]) < (first[0], first[1])
-        {
-            points_px.reverse();
-        }
-        let length_px = points_px
-            .windows(2)
-            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-            .sum();
-        if length_px >= min_length_px {
-            paths.push(CablePath {
-                points_px,
-                length_px,
-            });
-        }
+        paths.push(
+            path.iter()
+                .map(|&n| {
+                    let c = nodes.centres_px[n];
+                    [c[0] + offset[0], c[1] + offset[1]]
+                })
+                .collect(),
+        );
     }
-    paths.sort_by(|a, b| {
-        let (pa, pb) = (a.points_px[0], b.points_px[0]);
-        (pa[0], pa[1])
-            .partial_cmp(&(pb[0], pb[1]))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
-    Ok(FoundPaths { paths, width_px })
+    Ok(FoundPaths {
+        paths: finish_paths(paths, width_px, min_length_px),
+        width_px,
+    })
 }

@@ -1,0 +1,142 @@
+//! `cablecell render-dataset OUT`: synthetic images with exact ground
+//! truth, in the layout of cables-dev, for training the segmentation
+//! network and for scoring the pipeline with `eval-vision`.
+
+use std::path::{Path, PathBuf};
+
+use cablecell::sim::render::{BackgroundChoice, SceneOptions, write_dataset};
+use clap::Args;
+
+use super::Status;
+
+#[derive(Args, Debug, Clone)]
+pub struct RenderDatasetArgs {
+    /// The folder to write (created; must be empty or absent).
+    pub out: PathBuf,
+    /// How many images.
+    #[arg(long, default_value_t = 100)]
+    pub count: usize,
+    /// The seed: image K is drawn from stream K of this seed, so the same
+    /// seed and options give the same images, and a larger count only
+    /// adds images.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// What the cables lie on.
+    #[arg(long, value_enum, default_value = "any")]
+    pub backgrounds: BackgroundArg,
+    #[arg(long, default_value_t = 640)]
+    pub width_px: i32,
+    #[arg(long, default_value_t = 480)]
+    pub height_px: i32,
+    /// Fewest cables per image.
+    #[arg(long, default_value_t = 1)]
+    pub min_cables: usize,
+    /// Most cables per image.
+    #[arg(long, default_value_t = 4)]
+    pub max_cables: usize,
+    /// Thinnest cable, in pixels.
+    #[arg(long, default_value_t = 6.0)]
+    pub min_diameter_px: f64,
+    /// Thickest cable, in pixels.
+    #[arg(long, default_value_t = 16.0)]
+    pub max_diameter_px: f64,
+    /// Keep cables apart (no crossings).
+    #[arg(long)]
+    pub no_crossings: bool,
+}
+
+#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+pub enum BackgroundArg {
+    Plain,
+    Cluttered,
+    Any,
+}
+
+pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
+    let options = match scene_options(args) {
+        Ok(options) => options,
+        Err(reason) => {
+            eprintln!("error: render-dataset: {reason}");
+            return Status::BadInput;
+        }
+    };
+    if let Err(reason) = check_empty(&args.out) {
+        eprintln!("error: {}: {reason}", args.out.display());
+        return Status::BadInput;
+    }
+    match write_dataset(&args.out, args.count, args.seed, &options) {
+        Ok(()) => {
+            println!(
+                "{}: {} images, seed {}",
+                args.out.display(),
+                args.count,
+                args.seed
+            );
+            Status::Success
+        }
+        Err(error) => {
+            let mut message = format!("error: {}: {error}", args.out.display());
+            let mut source = std::error::Error::source(&error);
+            while let Some(cause) = source {
+                message.push_str(&format!(": {cause}"));
+                source = cause.source();
+            }
+            eprintln!("{message}");
+            Status::OutputFailed
+        }
+    }
+}
+
+/// The renderer's options from the command line, or what is wrong with
+/// them.
+fn scene_options(args: &RenderDatasetArgs) -> Result<SceneOptions, String> {
+    if args.width_px < 16 || args.height_px < 16 {
+        return Err(format!(
+            "--width-px and --height-px must be at least 16 (got {}×{})",
+            args.width_px, args.height_px
+        ));
+    }
+    if args.min_cables > args.max_cables {
+        return Err(format!(
+            "--min-cables {} exceeds --max-cables {}",
+            args.min_cables, args.max_cables
+        ));
+    }
+    let diameters_ok = args.min_diameter_px.is_finite()
+        && args.max_diameter_px.is_finite()
+        && args.min_diameter_px >= 1.0
+        && args.min_diameter_px <= args.max_diameter_px;
+    if !diameters_ok {
+        return Err(format!(
+            "cable diameters must satisfy 1 ≤ --min-diameter-px ≤ --max-diameter-px (got {} and {})",
+            args.min_diameter_px, args.max_diameter_px
+        ));
+    }
+    Ok(SceneOptions {
+        width_px: args.width_px,
+        height_px: args.height_px,
+        min_cables: args.min_cables,
+        max_cables: args.max_cables,
+        backgrounds: match args.backgrounds {
+            BackgroundArg::Plain => BackgroundChoice::Plain,
+            BackgroundArg::Cluttered => BackgroundChoice::Cluttered,
+            BackgroundArg::Any => BackgroundChoice::Any,
+        },
+        crossings: !args.no_crossings,
+        min_diameter_px: args.min_diameter_px,
+        max_diameter_px: args.max_diameter_px,
+    })
+}
+
+/// Refuses a folder that already holds files: images of another seed or
+/// count left beside the new ones would silently mix two data sets.
+fn check_empty(out: &Path) -> Result<(), String> {
+    match std::fs::read_dir(out) {
+        Ok(mut entries) => match entries.next() {
+            None => Ok(()),
+            Some(_) => Err("the folder is not empty; choose a new one or empty it".into()),
+        },
+        Err(error) if error.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(error) => Err(format!("cannot read the folder: {error}")),
+    }
+}

@@ -1,0 +1,243 @@
+//! `cablecell render-dataset`: the layout it writes (that of cables-dev,
+//! which `eval-vision` and the training script read), its determinism for
+//! a seed, and its refusals.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use opencv::core::{self, Mat};
+use opencv::imgcodecs;
+use opencv::prelude::*;
+
+fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
+        .output()
+        .expect("cablecell runs")
+}
+
+fn text(path: &Path) -> &str {
+    path.to_str().expect("utf-8 path")
+}
+
+fn read(path: &Path, flags: i32) -> Mat {
+    let image = imgcodecs::imread(text(path), flags).expect("imread");
+    assert!(!image.empty(), "{} missing or unreadable", path.display());
+    image
+}
+
+fn render(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["render-dataset", text(out)];
+    args.extend_from_slice(extra);
+    cablecell(&args)
+}
+
+#[test]
+fn writes_the_cables_dev_layout() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("set");
+    let run = render(
+        &out,
+        &[
+            "--count",
+            "4",
+            "--seed",
+            "5",
+            "--width-px",
+            "320",
+            "--height-px",
+            "240",
+            "--min-cables",
+            "2",
+            "--max-cables",
+            "3",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for index in 0..4 {
+        let stem = format!("{index:05}");
+        let image = read(&out.join(format!("{stem}.jpg")), imgcodecs::IMREAD_COLOR);
+        assert_eq!((image.cols(), image.rows()), (320, 240), "{stem}");
+
+        let polylines = std::fs::read_to_string(out.join(format!("{stem}.txt"))).expect("txt");
+        let lines: Vec<Vec<f64>> = polylines
+            .lines()
+            .map(|l| {
+                l.split_whitespace()
+                    .map(|w| w.parse().expect("number"))
+                    .collect()
+            })
+            .collect();
+        assert!(
+            (2..=3).contains(&lines.len()),
+            "{stem}: {} cables",
+            lines.len()
+        );
+
+        let union = read(
+            &out.join(format!("{stem}_mask_all.png")),
+            imgcodecs::IMREAD_GRAYSCALE,
+        );
+        let mut rebuilt = Mat::zeros(240, 320, core::CV_8U)
+            .expect("zeros")
+            .to_mat()
+            .expect("mat");
+        for (k, numbers) in lines.iter().enumerate() {
+            // `N x0 y0 ...`: N pairs follow.
+            let n = numbers[0] as usize;
+            assert_eq!(numbers.len(), 1 + 2 * n, "{stem} line {}", k + 1);
+            let mask = read(
+                &out.join(format!("{stem}_mask_{k}.png")),
+                imgcodecs::IMREAD_GRAYSCALE,
+            );
+            assert_eq!((mask.cols(), mask.rows()), (320, 240));
+            // A polyline point inside the image lies on its own cable's mask.
+            let inside: Vec<(i32, i32)> = numbers[1..]
+                .chunks_exact(2)
+                .map(|p| (p[0] as i32, p[1] as i32))
+                .filter(|&(x, y)| (0..320).contains(&x) && (0..240).contains(&y))
+                .collect();
+            assert!(!inside.is_empty(), "{stem}: cable {k} never in the image");
+            for (x, y) in inside {
+                assert_eq!(*mask.at_2d::<u8>(y, x).expect("pixel"), 255, "{stem} {k}");
+            }
+            let mut next = Mat::default();
+            core::bitwise_or(&rebuilt, &mask, &mut next, &core::no_array()).expect("or");
+            rebuilt = next;
+        }
+        assert!(
+            !out.join(format!("{stem}_mask_{}.png", lines.len()))
+                .exists(),
+            "{stem}: more masks than polylines"
+        );
+        let mut diff = Mat::default();
+        core::absdiff(&rebuilt, &union, &mut diff).expect("absdiff");
+        assert_eq!(
+            core::count_non_zero(&diff).expect("count"),
+            0,
+            "{stem}: the union mask is not the union of the cables' masks"
+        );
+    }
+    assert!(!out.join("00004.jpg").exists());
+}
+
+#[test]
+fn the_same_seed_gives_the_same_images_and_another_seed_others() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let args = ["--count", "2", "--width-px", "160", "--height-px", "120"];
+    let mut outputs = Vec::new();
+    for (name, seed) in [("a", "9"), ("b", "9"), ("c", "10")] {
+        let out = dir.path().join(name);
+        let mut all = args.to_vec();
+        all.extend(["--seed", seed]);
+        assert!(render(&out, &all).status.success());
+        outputs.push(std::fs::read(out.join("00001.jpg")).expect("image"));
+    }
+    assert_eq!(outputs[0], outputs[1]);
+    assert_ne!(outputs[0], outputs[2]);
+}
+
+#[test]
+fn refuses_a_folder_that_holds_files_and_bad_options() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("00000.jpg"), b"old").expect("write");
+    let run = render(dir.path(), &["--count", "1"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("not empty"));
+    assert_eq!(
+        std::fs::read(dir.path().join("00000.jpg")).expect("kept"),
+        b"old"
+    );
+
+    let out = dir.path().join("new");
+    let run = render(&out, &["--min-cables", "5", "--max-cables", "2"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--min-cables 5"));
+    let run = render(&out, &["--min-diameter-px", "0"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(!out.exists());
+}
+
+#[test]
+fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("plain");
+    let run = render(
+        &out,
+        &[
+            "--count",
+            "3",
+            "--seed",
+            "21",
+            "--backgrounds",
+            "plain",
+            "--max-cables",
+            "2",
+            "--no-crossings",
+        ],
+    );
+    assert!(run.status.success());
+
+    let eval = cablecell(&[
+        "eval-vision",
+        text(&out),
+        "--mask",
+        "classical",
+        "--from",
+        "00001",
+        "--json",
+    ]);
+    assert!(
+        eval.status.success(),
+        "{}",
+        String::from_utf8_lossy(&eval.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("JSON");
+    assert_eq!(e["images"], 2, "{e}");
+    let stems: Vec<&str> = e["per_image"]
+        .as_array()
+        .expect("per image")
+        .iter()
+        .map(|p| p[0].as_str().expect("stem"))
+        .collect();
+    assert_eq!(stems, ["00001", "00002"]);
+    // Exact ground truth and plain backgrounds: the classical mask matches.
+    assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
+
+    let none = cablecell(&["eval-vision", text(&out), "--from", "00005"]);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&none.stderr).contains("between 00005 and the last"));
+
+    let sweep = cablecell(&[
+        "eval-vision",
+        text(&out),
+        "--to",
+        "00000",
+        "--sweep",
+        "--json",
+    ]);
+    assert!(
+        sweep.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sweep.stderr)
+    );
+    let rows: serde_json::Value = serde_json::from_slice(&sweep.stdout).expect("JSON");
+    let settings: Vec<&str> = rows
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|r| r["setting"].as_str().expect("setting"))
+        .collect();
+    assert_eq!(settings.len(), 7, "{settings:?}");
+    assert!(settings[0].starts_with("classical mask"));
+    assert!(settings.iter().any(|s| s.contains("superpixels")));
+    assert!(
+        rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
+        "{rows}"
+    );
+}
