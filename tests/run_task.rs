@@ -200,17 +200,13 @@ fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
 
 #[test]
 fn a_silent_tactile_sensor_is_a_device_fault_and_keeps_the_record() {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell");
-    let models = root().join("models");
-    let text = text
-        .replace(
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cell = common::sim_cell_copy(dir.path(), |text| {
+        text.replace(
             "noise_fraction = 0.02",
             "noise_fraction = 0.02\nsilent_after_frames = 55",
         )
-        .replace("../models", models.to_str().expect("utf-8"));
-    let dir = tempfile::tempdir().expect("tempdir");
-    let cell = dir.path().join("cell.toml");
-    std::fs::write(&cell, text).expect("write");
+    });
     let out = cablecell(&[
         "run",
         "tasks/regrasp.toml",

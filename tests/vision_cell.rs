@@ -3,8 +3,9 @@
 //! against the simulated cable's truth, a real camera's image folder, and
 //! the errors a user meets.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+mod common;
 
 use cablecell::cell::Cell;
 use cablecell::hw::DeviceError;
@@ -12,14 +13,11 @@ use cablecell::hw::camera::{Camera, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
 use cablecell::task::cell_file::{CameraBackend, CameraSource};
 use cablecell::task::load_cell;
+use common::root;
 use nalgebra::Vector3;
 use opencv::core::{Mat, Scalar};
 use opencv::imgcodecs;
 use opencv::prelude::*;
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn cablecell(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cablecell"))
@@ -27,17 +25,6 @@ fn cablecell(args: &[&str]) -> Output {
         .current_dir(root())
         .output()
         .expect("cablecell runs")
-}
-
-/// The shipped simulated cell copied into `dir`, its model path made
-/// absolute, after `edit`.
-fn cell_copy(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
-    let models = root().join("models");
-    let text = edit(text.replace("../models", models.to_str().expect("utf-8")));
-    let path = dir.join("cell.toml");
-    std::fs::write(&path, text).expect("write");
-    path
 }
 
 /// The text with the `[camera.calibration]` table (its comment, header and
@@ -95,7 +82,7 @@ fn the_detected_grasp_frame_is_the_cable_s_midpoint_frame() {
 #[test]
 fn calibrate_camera_stores_a_pose_near_the_true_one_and_keeps_the_file() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let path = cell_copy(dir.path(), without_calibration);
+    let path = common::sim_cell_copy(dir.path(), without_calibration);
     let before = std::fs::read_to_string(&path).expect("read");
     assert!(!before.contains("[camera.calibration]"));
 
@@ -163,7 +150,7 @@ fn calibrate_camera_stores_a_pose_near_the_true_one_and_keeps_the_file() {
 fn calibration_without_the_marker_in_view_fails_clearly() {
     let dir = tempfile::tempdir().expect("tempdir");
     // The first pose turns the hand half a turn: the marker faces away.
-    let path = cell_copy(dir.path(), |text| {
+    let path = common::sim_cell_copy(dir.path(), |text| {
         text.replace(
             "[450.0, 0.0, 330.0], rotation_rpy_rad = [3.141592653589793, 0.0, 0.0]",
             "[450.0, 0.0, 330.0], rotation_rpy_rad = [3.141592653589793, 0.0, 3.141592653589793]",
@@ -186,7 +173,7 @@ fn calibration_without_the_marker_in_view_fails_clearly() {
 #[test]
 fn a_missing_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let path = cell_copy(dir.path(), |text| {
+    let path = common::sim_cell_copy(dir.path(), |text| {
         text.replace("cable_segmentation.onnx", "no-such-model.onnx")
     });
     let out = cablecell(&[
@@ -300,7 +287,7 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
     assert!((t[2] - center[2]).abs() < 1.0, "{t:?}");
 
     // A cell whose camera is not calibrated cannot place them.
-    let path = cell_copy(dir.path(), without_calibration);
+    let path = common::sim_cell_copy(dir.path(), without_calibration);
     let out = cablecell(&[
         "detect",
         "--cell",

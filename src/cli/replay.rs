@@ -11,6 +11,7 @@ use opencv::imgcodecs;
 use opencv::prelude::*;
 
 use super::Status;
+use super::run::print_timeline_line;
 use super::vision_io::VisionArgs;
 
 pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>) -> Status {
@@ -51,14 +52,7 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
     println!("timeline:");
     let mut entered_s = 0.0;
     for t in &replay.transitions {
-        println!(
-            "{:9.3} s  {:>11} → {:<11}  ({} took {:.3} s)",
-            t.t_s,
-            t.from,
-            t.to,
-            t.from,
-            t.t_s - entered_s
-        );
+        print_timeline_line(t.t_s, &t.from, &t.to, entered_s);
         entered_s = t.t_s;
     }
     for estimator in estimators {

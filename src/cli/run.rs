@@ -147,13 +147,14 @@ impl Commentary {
 /// Transition `i` of `record`, with the time spent in the state it left.
 pub(super) fn print_transition(record: &RunRecord, i: usize, t: &TransitionRecord) {
     let entered_s = i.checked_sub(1).map_or(0.0, |p| record.transitions[p].t_s);
+    print_timeline_line(t.t_s, t.from, t.to, entered_s);
+}
+
+/// A transition at `t_s` from the state entered at `entered_s`.
+pub(super) fn print_timeline_line(t_s: f64, from: &str, to: &str, entered_s: f64) {
     println!(
-        "{:9.3} s  {:>11} → {:<11}  ({} took {:.3} s)",
-        t.t_s,
-        t.from,
-        t.to,
-        t.from,
-        t.t_s - entered_s
+        "{t_s:9.3} s  {from:>11} → {to:<11}  ({from} took {:.3} s)",
+        t_s - entered_s
     );
 }
 

@@ -14,6 +14,17 @@ pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The shipped simulated cell's text after `edit`, written into `dir`, its
+/// model path made absolute so that the copy finds the model.
+pub fn sim_cell_copy(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    let models = root().join("models");
+    let text = edit(text.replace("../models", models.to_str().expect("utf-8")));
+    let path = dir.join("cell.toml");
+    std::fs::write(&path, text).expect("write");
+    path
+}
+
 /// σ of the oracle's miss across the cable and about the pad's normal.
 pub const ORACLE_NOISE: (f64, f64) = (3.0, 0.2);
 
