@@ -209,7 +209,7 @@ fn a_tactile_sensor_that_fails_during_the_grasp_faults_and_the_jaws_let_go() {
     for (misbehaviour, expected) in [
         (
             tactile::Misbehaviour::Silent,
-            "no answer to sample within 100 ms",
+            "no answer to sample within 200 ms",
         ),
         (
             tactile::Misbehaviour::Truncated,
