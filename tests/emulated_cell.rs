@@ -212,7 +212,7 @@ fn a_tactile_sensor_that_fails_during_the_grasp_faults_and_the_jaws_let_go() {
     for (misbehaviour, expected) in [
         (
             tactile::Misbehaviour::Silent,
-            "no answer to sample within 100 ms",
+            "no answer to sample within 200 ms",
         ),
         (
             tactile::Misbehaviour::Truncated,
@@ -270,4 +270,43 @@ fn a_wild_regrasp_correction_is_refused_by_the_workspace_box() {
     let (opening_mm, holding) = jaws(&world);
     assert_eq!(opening_mm, task.grasp.open_mm);
     assert!(!holding);
+}
+
+#[test]
+fn cablecell_run_on_the_emulated_cell_succeeds_and_a_device_fault_exits_with_3() {
+    let run = |cell: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+            .current_dir(root())
+            .args(["run", "tasks/regrasp.toml", "--seed", "3", "--cell"])
+            .arg(cell)
+            .output()
+            .expect("runs")
+    };
+    let out = run(Path::new("config/cell.emulated.toml"));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains("task regrasp on emulated cell (seed 3)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("success: within tolerance"), "{stdout}");
+
+    let text = std::fs::read_to_string(root().join("config/cell.emulated.toml")).expect("cell");
+    let text = text.replacen(
+        "module_id = 12",
+        "module_id = 12\nfault = { misbehaviour = { error_frame = 0xDA }, after_requests = 2 }",
+        1,
+    );
+    let dir = tempfile::tempdir().expect("scratch");
+    let path = dir.path().join("cell.toml");
+    std::fs::write(&path, text).expect("write");
+    let out = run(&path);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(3), "{stdout}");
+    assert!(
+        stdout.contains(
+            "device fault in trial_grasp (gripper): gripper: refused grip: error 0xDA: tow error"
+        ),
+        "{stdout}"
+    );
 }

@@ -14,6 +14,7 @@ use cablecell::hw::{DeviceError, DeviceKind};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
 use cablecell::sim::emulator::pg70::{FreeJaws, Pg70Emulator};
 use cablecell::sim::emulator::tactile::TactileEmulator;
+use cablecell::task::cell_file::{GripperBackend, TactileBackend};
 use cablecell::task::load_cell;
 use serialport::{SerialPort, TTYPort};
 
@@ -222,4 +223,28 @@ fn an_unknown_fault_is_refused_with_the_known_ones() {
     );
     assert!(err.contains("unknown variant `explode`"), "{err}");
     assert!(err.contains("`vanish`"), "{err}");
+}
+
+#[test]
+fn the_real_backends_defaults_are_the_devices_own() {
+    let text = cell_text(
+        "[gripper.backend.pg70]\nport = \"/dev/ttyUSB0\"\nmodule_id = 12",
+        "[tactile.backend.remodel]\nport = \"/dev/ttyACM0\"",
+    );
+    let dir = tempfile::tempdir().expect("scratch");
+    let file = load_cell(&write(dir.path(), &text)).expect("a lab cell");
+    let GripperBackend::Pg70(pg70) = &file.gripper.backend else {
+        panic!("{:?}", file.gripper.backend);
+    };
+    assert_eq!(
+        (pg70.baud, pg70.reply_timeout_ms, pg70.move_timeout_ms),
+        (9600, 500, 10_000)
+    );
+    assert!(pg70.motion.is_none());
+    let TactileBackend::Remodel(remodel) = &file.tactile.backend else {
+        panic!("{:?}", file.tactile.backend);
+    };
+    assert_eq!((remodel.baud, remodel.deadline_ms), (1_000_000, 20));
+    assert_eq!(remodel.layout, std::array::from_fn(|k| k));
+    assert_eq!(file.tactile.rate_hz, 500.0);
 }

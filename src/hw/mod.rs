@@ -38,7 +38,9 @@ impl std::fmt::Display for DeviceKind {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum DeviceError {
-    /// The device did not answer in time: check its cable, power and port.
+    /// The device did not answer in time (a simulated device, or the
+    /// tactile polling thread whose sensor is stuck): check its cable,
+    /// power and port.
     #[error("{device}: no answer within {waited_ms} ms")]
     Timeout { device: DeviceKind, waited_ms: u64 },
     /// The device on a serial port did not answer in time: check its

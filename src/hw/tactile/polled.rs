@@ -124,17 +124,17 @@ impl Drop for PolledTactile {
 mod tests {
     use super::*;
 
-    /// Frame n reads n on every taxel; after `fails_after` frames it
-    /// answers with a timeout, or hangs for `hang` when that is set.
+    /// Frame n reads n on every taxel; once `failing` is set it answers
+    /// with a timeout, after hanging for `hang` when that is set.
     struct Scripted {
         n: u16,
-        fails_after: u16,
+        failing: Arc<AtomicBool>,
         hang: Option<Duration>,
     }
 
     impl TactileSensor for Scripted {
         fn read(&mut self) -> Result<TactileFrame, DeviceError> {
-            if self.n >= self.fails_after {
+            if self.failing.load(Ordering::SeqCst) {
                 if let Some(hang) = self.hang {
                     std::thread::sleep(hang);
                 }
@@ -153,9 +153,10 @@ mod tests {
 
     #[test]
     fn readers_get_fresh_frames_each_once_then_the_sensors_error() {
+        let failing = Arc::new(AtomicBool::new(false));
         let sensor = Scripted {
             n: 0,
-            fails_after: 20,
+            failing: Arc::clone(&failing),
             hang: None,
         };
         let mut polled = PolledTactile::start(sensor, 1000.0);
@@ -165,10 +166,12 @@ mod tests {
             assert!(frame.raw[0] > last, "{} after {last}", frame.raw[0]);
             last = frame.raw[0];
         }
-        let error = (0..40).find_map(|_| polled.read().err());
+        // The sensor fails from now on: the next read is a poll made after
+        // it, so it gets the error.
+        failing.store(true, Ordering::SeqCst);
         assert_eq!(
-            error,
-            Some(DeviceError::Timeout {
+            polled.read(),
+            Err(DeviceError::Timeout {
                 device: DeviceKind::Tactile,
                 waited_ms: 20
             })
@@ -179,7 +182,7 @@ mod tests {
     fn a_sensor_that_hangs_is_a_timeout_for_the_reader() {
         let sensor = Scripted {
             n: 0,
-            fails_after: 0,
+            failing: Arc::new(AtomicBool::new(true)),
             hang: Some(Duration::from_secs(2)),
         };
         let mut polled = PolledTactile::start(sensor, 500.0);

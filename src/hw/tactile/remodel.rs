@@ -116,23 +116,24 @@ impl<L: SerialLink> RemodelTactile<L> {
         let deadline = Instant::now() + self.deadline;
         let mut filled = 0;
         while filled < answer.len() {
-            if Instant::now() >= deadline && filled == 0 {
-                return Err(DeviceError::NoAnswer {
-                    device: DeviceKind::Tactile,
-                    port: self.port_name.clone(),
-                    command: name,
-                    waited_ms: self.deadline.as_millis() as u64,
-                });
-            }
             if Instant::now() >= deadline {
-                return Err(DeviceError::Garbled {
-                    device: DeviceKind::Tactile,
-                    port: self.port_name.clone(),
-                    detail: format!(
-                        "{name}: answer cut short: {filled} of {} bytes within {} ms",
-                        answer.len(),
-                        self.deadline.as_millis()
-                    ),
+                let waited_ms = self.deadline.as_millis() as u64;
+                return Err(if filled == 0 {
+                    DeviceError::NoAnswer {
+                        device: DeviceKind::Tactile,
+                        port: self.port_name.clone(),
+                        command: name,
+                        waited_ms,
+                    }
+                } else {
+                    DeviceError::Garbled {
+                        device: DeviceKind::Tactile,
+                        port: self.port_name.clone(),
+                        detail: format!(
+                            "{name}: answer cut short: {filled} of {} bytes within {waited_ms} ms",
+                            answer.len()
+                        ),
+                    }
                 });
             }
             match self.link.read(&mut answer[filled..]) {
