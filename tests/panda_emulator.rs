@@ -42,6 +42,18 @@ fn without_the_feature_a_panda_cell_says_how_to_build() {
     assert!(error.contains("arm.backend"), "{error}");
 }
 
+#[cfg(not(feature = "panda"))]
+#[test]
+fn without_the_feature_the_bring_up_command_says_how_to_build() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(["device", "arm", "--address", "172.16.0.2", "state"])
+        .output()
+        .expect("cablecell runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--features panda"), "{err}");
+}
+
 #[cfg(feature = "panda")]
 mod emulated {
     use std::net::{IpAddr, Ipv4Addr};
