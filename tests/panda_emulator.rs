@@ -42,6 +42,18 @@ fn without_the_feature_a_panda_cell_says_how_to_build() {
     assert!(error.contains("arm.backend"), "{error}");
 }
 
+#[cfg(not(feature = "panda"))]
+#[test]
+fn without_the_feature_the_bring_up_command_says_how_to_build() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(["device", "arm", "--address", "172.16.0.2", "state"])
+        .output()
+        .expect("cablecell runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--features panda"), "{err}");
+}
+
 #[cfg(feature = "panda")]
 mod emulated {
     use std::net::{IpAddr, Ipv4Addr};
@@ -290,52 +302,30 @@ mod emulated {
         assert!(error.contains("without a port"), "{error}");
     }
 
-    fn cablecell(args: &[&str]) -> std::process::Output {
-        Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    /// `cablecell device arm --address 127.0.0.LAST ARGS...`: its exit
+    /// status, standard output and standard error.
+    fn device_arm(last: u8, args: &[&str]) -> (Option<i32>, String, String) {
+        let out = Command::new(env!("CARGO_BIN_EXE_cablecell"))
+            .args(["device", "arm", "--address", &format!("127.0.0.{last}")])
             .args(args)
             .output()
-            .expect("cablecell runs")
+            .expect("cablecell runs");
+        let text = |bytes: &[u8]| String::from_utf8_lossy(bytes).into_owned();
+        (out.status.code(), text(&out.stdout), text(&out.stderr))
     }
 
     #[test]
     fn the_bring_up_command_reads_the_state_and_makes_a_guarded_move() {
         let _turn = one_at_a_time();
         let emulator = PandaEmulator::start(ip(9), start_pose()).expect("emulator");
-        let out = cablecell(&["device", "arm", "--address", "127.0.0.9", "state"]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8_lossy(&out.stdout);
+        let (status, out, err) = device_arm(9, &["state"]);
+        assert_eq!(status, Some(0), "{err}");
         // Without a cell file the TCP is the end effector set in Desk.
-        assert!(
-            text.contains("x +500.000 y +20.000 z +400.000 mm"),
-            "{text}"
-        );
+        assert!(out.contains("x +500.000 y +20.000 z +400.000 mm"), "{out}");
 
-        let out = cablecell(&[
-            "device",
-            "arm",
-            "--address",
-            "127.0.0.9",
-            "move-rel",
-            "10",
-            "0",
-            "-5",
-        ]);
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            text.contains("x +510.000 y +20.000 z +395.000 mm"),
-            "{text}"
-        );
+        let (status, out, err) = device_arm(9, &["move-rel", "10", "0", "-5"]);
+        assert_eq!(status, Some(0), "{err}");
+        assert!(out.contains("x +510.000 y +20.000 z +395.000 mm"), "{out}");
         assert_relative_eq!(
             emulator.base_from_ee().translation.vector,
             Vector3::new(510.0, 20.0, 395.0),
@@ -343,19 +333,13 @@ mod emulated {
         );
 
         // Too far, or too fast: refused before connecting.
-        for args in [["move-rel", "60", "0", "0"], ["move-rel", "0", "0", "0"]] {
-            let mut command = vec!["device", "arm", "--address", "127.0.0.9"];
-            command.extend(args);
-            if args[1] == "0" {
-                command.extend(["--speed-mm-s", "50"]);
-            }
-            let out = cablecell(&command);
-            assert_eq!(
-                out.status.code(),
-                Some(2),
-                "{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+        for args in [
+            &["move-rel", "60", "0", "0"][..],
+            &["move-rel", "1", "0", "0", "--speed", "50"],
+        ] {
+            let (status, _, err) = device_arm(9, args);
+            assert_eq!(status, Some(2), "{err}");
+            assert!(err.contains("at most 50 mm at (0, 20] mm/s"), "{err}");
         }
         assert_eq!(emulator.report().motions_finished, 1);
     }
@@ -363,12 +347,11 @@ mod emulated {
     #[test]
     fn the_bring_up_command_says_when_nobody_answers() {
         let _turn = one_at_a_time();
-        let out = cablecell(&["device", "arm", "--address", "127.0.0.10", "state"]);
-        assert_eq!(out.status.code(), Some(3));
-        let text = String::from_utf8_lossy(&out.stderr);
+        let (status, _, err) = device_arm(10, &["state"]);
+        assert_eq!(status, Some(3));
         assert!(
-            text.contains("127.0.0.10:1337") && text.contains("cannot connect"),
-            "{text}"
+            err.contains("127.0.0.10:1337") && err.contains("cannot connect"),
+            "{err}"
         );
     }
 }

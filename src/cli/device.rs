@@ -66,7 +66,7 @@ pub enum ArmAction {
         dx_mm: f64,
         dy_mm: f64,
         dz_mm: f64,
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long = "speed", value_name = "MM_S", default_value_t = 10.0)]
         speed_mm_s: f64,
     },
     /// Stop any motion.
