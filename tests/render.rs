@@ -186,6 +186,7 @@ fn every_background_kind_renders() {
         Background::Checker,
         Background::Wood,
         Background::Printed,
+        Background::Sheets,
     ];
     for kind in kinds {
         let mut scene = plain(

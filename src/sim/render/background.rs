@@ -1,7 +1,7 @@
 //! The backgrounds, as CV_32FC3 images in gray levels (0–255): each kind
 //! draws its colours, scales and layout from the render's generator.
 
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 use opencv::core::{self, Mat, Point, Rect, Scalar, Size, Vec3f};
 use opencv::imgproc;
@@ -25,6 +25,7 @@ pub(super) fn draw(
         Background::Checker => checker(width, height, rng),
         Background::Wood => wood(width, height, rng),
         Background::Printed => printed(width, height, rng),
+        Background::Sheets => sheets(width, height, rng),
     }
 }
 
@@ -303,4 +304,102 @@ fn printed(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErr
     soft.convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
         .map_err(cv("convert the paper"))?;
     Ok(out)
+}
+
+/// A fully saturated-to-grey colour of hue `hue_deg`, saturation and value
+/// in [0, 1], as BGR gray levels.
+fn from_hsv(hue_deg: f64, saturation: f64, value: f64) -> [f64; 3] {
+    let sector = (hue_deg.rem_euclid(360.0)) / 60.0;
+    let chroma = value * saturation;
+    let second = chroma * (1.0 - (sector % 2.0 - 1.0).abs());
+    let (r, g, b) = match sector as u32 {
+        0 => (chroma, second, 0.0),
+        1 => (second, chroma, 0.0),
+        2 => (0.0, chroma, second),
+        3 => (0.0, second, chroma),
+        4 => (second, 0.0, chroma),
+        _ => (chroma, 0.0, second),
+    };
+    let low = value - chroma;
+    [b, g, r].map(|c| 255.0 * (c + low))
+}
+
+/// A sheet's colour: pale paper half the time, else a strong colour like
+/// coloured paper, card or cloth.
+fn sheet_colour(rng: &mut impl Rng) -> [f64; 3] {
+    if rng.random_bool(0.5) {
+        let level = rng.random_range(200.0..250.0);
+        near(rng, [level; 3], 10.0)
+    } else {
+        from_hsv(
+            rng.random_range(0.0..360.0),
+            rng.random_range(0.25..0.8),
+            rng.random_range(0.45..0.95),
+        )
+    }
+}
+
+/// One to three sheets, each a slightly rotated rectangle reaching past at
+/// least one side of the image, on a mottled table; a sheet may have a row
+/// of punched holes along an edge that shows the table through them.
+fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let table = colour(rng, 60.0..230.0);
+    let mut image = Mat::new_rows_cols_with_default(
+        height,
+        width,
+        core::CV_8UC3,
+        Scalar::new(table[0], table[1], table[2], 0.0),
+    )
+    .map_err(cv("allocate the table"))?;
+    let (w, h) = (f64::from(width), f64::from(height));
+    for _ in 0..rng.random_range(1..=3) {
+        let paper = sheet_colour(rng);
+        let angle = rng.random_range(-0.25..0.25_f64) + f64::from(rng.random_range(0..4)) * PI / 2.0;
+        let (sin, cos) = angle.sin_cos();
+        // The sheet's near corner inside the image; it runs off the far side.
+        let corner = [rng.random_range(0.0..0.5 * w), rng.random_range(0.0..0.5 * h)];
+        let size = [rng.random_range(0.5..2.0) * w, rng.random_range(0.5..2.0) * h];
+        let at = |u: f64, v: f64| [corner[0] + u * cos - v * sin, corner[1] + u * sin + v * cos];
+        let outline: Vec<Point> = [[0.0, 0.0], [size[0], 0.0], [size[0], size[1]], [0.0, size[1]]]
+            .iter()
+            .map(|&[u, v]| {
+                let [x, y] = at(u, v);
+                Point::new(x.round() as i32, y.round() as i32)
+            })
+            .collect();
+        let outline = core::Vector::<core::Vector<Point>>::from_iter([outline.into()]);
+        let ink = Scalar::new(paper[0], paper[1], paper[2], 0.0);
+        imgproc::fill_poly(&mut image, &outline, ink, imgproc::LINE_AA, 0, Point::default())
+            .map_err(cv("lay a sheet"))?;
+        if rng.random_bool(0.5) {
+            // Holes along the sheet's edge v = 0, like a binder's punch.
+            let inset = rng.random_range(6.0..20.0);
+            let pitch = rng.random_range(12.0..30.0);
+            let (long, short) = (rng.random_range(3.0..10.0), rng.random_range(2.0..5.0));
+            let hole = Scalar::new(table[0], table[1], table[2], 0.0);
+            let mut u = pitch / 2.0;
+            while u < size[0] {
+                let [x, y] = at(u, inset);
+                let hole_box = core::RotatedRect::new(
+                    core::Point2f::new(x as f32, y as f32),
+                    core::Size2f::new(short as f32, long as f32),
+                    angle.to_degrees() as f32,
+                )
+                .map_err(cv("place a hole"))?;
+                imgproc::ellipse_rotated_rect(&mut image, hole_box, hole, imgproc::FILLED, imgproc::LINE_AA)
+                    .map_err(cv("punch a hole"))?;
+                u += pitch;
+            }
+        }
+    }
+    let mut out = Mat::default();
+    image
+        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv("convert the sheets"))?;
+    // Paper and cloth are not flat: a faint mottle over everything.
+    let mottle = smooth_noise(width, height, 12, 9, 3, rng)?;
+    let mut sum = Mat::default();
+    core::scale_add(&mottle, rng.random_range(3.0..15.0), &out, &mut sum)
+        .map_err(cv("mottle the sheets"))?;
+    Ok(sum)
 }

@@ -54,6 +54,10 @@ pub enum Background {
     /// Paper with printed shapes, lines and text in many colours: the
     /// clutter that looks most like cables.
     Printed,
+    /// Sheets of paper, card or cloth, pale or strongly coloured, lying
+    /// on a table, some punched along one edge: long straight edges and
+    /// rows of holes that are not cables.
+    Sheets,
 }
 
 /// A cable to draw: its centre line in the image (a smooth curve, points

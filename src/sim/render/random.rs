@@ -17,7 +17,8 @@ pub enum BackgroundChoice {
     /// Flat colours and smooth gradients: what a classical threshold
     /// segments.
     Plain,
-    /// Noise, stripes, checkers, wood and print: what needs the network.
+    /// Noise, stripes, checkers, wood, print and sheets: what needs the
+    /// network.
     Cluttered,
     /// Either, cluttered more often.
     Any,
@@ -59,12 +60,13 @@ impl Default for SceneOptions {
 }
 
 /// The backgrounds a cluttered scene draws from.
-const CLUTTERED: [Background; 5] = [
+const CLUTTERED: [Background; 6] = [
     Background::Noise,
     Background::Stripes,
     Background::Checker,
     Background::Wood,
     Background::Printed,
+    Background::Sheets,
 ];
 
 /// Typical wire insulation colours (BGR): black, white, red, blue, green,
