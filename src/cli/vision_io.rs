@@ -40,6 +40,13 @@ pub struct VisionArgs {
     /// (smaller: more superpixels).
     #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
     pub superpixel_widths: f64,
+    /// Drop cables shorter than this (px): scraps of mask.
+    #[arg(long, default_value_t = VisionConfig::default().min_cable_length_px, value_parser = length_px)]
+    pub min_length_px: f64,
+    /// Drop cables that run out of the image (or region of interest) and
+    /// are shorter than this (px): too little of them is in view to grasp.
+    #[arg(long, default_value_t = VisionConfig::default().min_border_cable_length_px, value_parser = length_px)]
+    pub min_border_length_px: f64,
 }
 
 fn number_in(text: &str, low: f64, high: f64) -> Result<f64, String> {
@@ -59,6 +66,17 @@ fn probability(text: &str) -> Result<f32, String> {
 
 fn input_scale(text: &str) -> Result<f64, String> {
     number_in(text, 0.0, 2.0)
+}
+
+fn length_px(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("{value} is not a length of 0 px or more"))
+    }
 }
 
 fn region_widths(text: &str) -> Result<f64, String> {
@@ -91,6 +109,8 @@ impl VisionArgs {
                 InstancesArg::Superpixels => InstanceMethod::Superpixels,
             },
             superpixel_widths: self.superpixel_widths,
+            min_cable_length_px: self.min_length_px,
+            min_border_cable_length_px: self.min_border_length_px,
             ..VisionConfig::default()
         };
         Pipeline::new(config)

@@ -46,6 +46,10 @@ pub struct VisionConfig {
     pub roi_px: Option<Rect>,
     /// Paths shorter than this are dropped: scraps of mask, not cables.
     pub min_cable_length_px: f64,
+    /// Paths that run out of the region worked on and are shorter than
+    /// this are dropped too: too little of such a cable is in view to
+    /// grasp it, and the middle of what is seen is not the cable's middle.
+    pub min_border_cable_length_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
     /// instances are looked for.
     pub min_blob_area_px: f64,
@@ -64,6 +68,7 @@ impl Default for VisionConfig {
             instances: InstanceMethod::Skeleton,
             roi_px: None,
             min_cable_length_px: 40.0,
+            min_border_cable_length_px: 40.0,
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
             superpixel_widths: super::superpixels::DEFAULT_REGION_WIDTHS,
@@ -285,13 +290,33 @@ impl Pipeline {
                 self.config.superpixel_widths,
             )?,
         };
+        let rows = f64::from(mask_roi.rows());
+        let cols = f64::from(mask_roi.cols());
+        // A skeleton ends about half a width short of where its cable
+        // leaves the region.
+        let margin_px = found.width_px + 2.0;
+        let at_border = |p: &[f64; 2]| {
+            p[0] < margin_px
+                || p[1] < margin_px
+                || p[0] > cols - 1.0 - margin_px
+                || p[1] > rows - 1.0 - margin_px
+        };
+        let paths: Vec<_> = found
+            .paths
+            .iter()
+            .filter(|path| {
+                let ends = [path.points_px.first(), path.points_px.last()];
+                path.length_px >= self.config.min_border_cable_length_px
+                    || !ends.into_iter().flatten().any(at_border)
+            })
+            .collect();
         timings_ms.push(("instances", ms_since(start)));
 
         let start = Instant::now();
         let offset = [f64::from(roi.x), f64::from(roi.y)];
         let shift = |p: [f64; 2]| [p[0] + offset[0], p[1] + offset[1]];
         let mut fitted = Vec::new();
-        for path in &found.paths {
+        for path in paths {
             let n = spline::control_points_for_length(path.length_px);
             let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
                 continue;
@@ -632,6 +657,34 @@ mod tests {
             Pipeline::new(off).detect(&scene.image, None),
             Err(VisionError::RoiOutside { .. })
         ));
+    }
+
+    #[test]
+    fn a_short_cable_running_out_of_view_is_dropped_a_short_loose_one_kept() {
+        // Both 60 px long: one enters from the left border, one lies loose.
+        let at_border = segment_px([0.0, 100.0], [60.0, 100.0]);
+        let loose = segment_px([300.0, 300.0], [360.0, 300.0]);
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 210.0 },
+            vec![cable(at_border, [20.0; 3]), cable(loose.clone(), [20.0; 3])],
+            8,
+        )
+        .unwrap();
+        let keep_all = VisionConfig {
+            min_border_cable_length_px: 0.0,
+            ..VisionConfig::default()
+        };
+        assert_eq!(detect(&scene.image, keep_all).cables.len(), 2);
+        let out = detect(
+            &scene.image,
+            VisionConfig {
+                min_border_cable_length_px: 80.0,
+                ..VisionConfig::default()
+            },
+        );
+        assert_each_followed(&out, std::slice::from_ref(&loose), 2.5);
     }
 
     /// Stands in for the segmentation network: the mask of the drawn cables.
