@@ -118,7 +118,9 @@ pub struct VisionOutput {
     pub plain_background: bool,
     /// The background statistics behind that judgement.
     pub background: BackgroundStats,
-    /// All cables' pixels: CV_8U 0/255, the image's size.
+    /// The union of the cables' masks: CV_8U 0/255, the image's size.
+    /// Mask pixels no cable took (scraps, stubs at the border) are not in
+    /// it.
     pub union_mask: Mat,
     /// The cables' typical width (mask area over skeleton length).
     pub cable_width_px: f64,
@@ -238,7 +240,13 @@ impl Pipeline {
 
         let found = self.cables_in(&work, &mask_roi, roi, full)?;
         timings_ms.extend(found.timings_ms);
-        let union_mask = place(&mask_roi, roi, full)?;
+        let mut union_mask = mask::zeros_u8(full.height, full.width)?;
+        for cable in &found.cables {
+            let mut next = Mat::default();
+            core::bitwise_or(&union_mask, &cable.mask, &mut next, &core::no_array())
+                .map_err(cv("union of the cables' masks"))?;
+            union_mask = next;
+        }
         Ok(VisionOutput {
             cables: found.cables,
             mask_used,
