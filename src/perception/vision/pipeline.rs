@@ -68,7 +68,7 @@ impl Default for VisionConfig {
             instances: InstanceMethod::Skeleton,
             roi_px: None,
             min_cable_length_px: 40.0,
-            min_border_cable_length_px: 40.0,
+            min_border_cable_length_px: 80.0,
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
             superpixel_widths: super::superpixels::DEFAULT_REGION_WIDTHS,
