@@ -372,33 +372,11 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
         imgproc::fill_poly(&mut image, &outline, ink, imgproc::LINE_AA, 0, Point::default())
             .map_err(cv("lay a sheet"))?;
         if rng.random_bool(0.5) {
-            // The sheet's cut edge catching the light, or its shadow: a
-            // thin straight line the colour of neither side.
-            let edge = colour(rng, 0.0..255.0);
-            imgproc::polylines(
-                &mut image,
-                &outline,
-                true,
-                Scalar::new(edge[0], edge[1], edge[2], 0.0),
-                rng.random_range(1..4),
-                imgproc::LINE_AA,
-                0,
-            )
-            .map_err(cv("draw a sheet's edge"))?;
-        }
-        if rng.random_bool(0.6) {
-            // Holes along the sheet's edge v = 0, like a binder's punch,
-            // showing the table or a white page beneath.
-            let inset = rng.random_range(4.0..20.0);
-            let pitch = rng.random_range(10.0..30.0);
-            let (long, short) = (rng.random_range(3.0..12.0), rng.random_range(2.0..6.0));
-            let under = if rng.random_bool(0.5) {
-                table
-            } else {
-                near(rng, [245.0; 3], 10.0)
-            };
-            let hole = Scalar::new(under[0], under[1], under[2], 0.0);
-            let round = rng.random_bool(0.4);
+            // Holes along the sheet's edge v = 0, like a binder's punch.
+            let inset = rng.random_range(6.0..20.0);
+            let pitch = rng.random_range(12.0..30.0);
+            let (long, short) = (rng.random_range(3.0..10.0), rng.random_range(2.0..5.0));
+            let hole = Scalar::new(table[0], table[1], table[2], 0.0);
             let mut u = pitch / 2.0;
             while u < size[0] {
                 let [x, y] = at(u, inset);
@@ -408,19 +386,8 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
                     angle.to_degrees() as f32,
                 )
                 .map_err(cv("place a hole"))?;
-                if round {
-                    imgproc::ellipse_rotated_rect(&mut image, hole_box, hole, imgproc::FILLED, imgproc::LINE_AA)
-                        .map_err(cv("punch a hole"))?;
-                } else {
-                    let mut corners = [core::Point2f::default(); 4];
-                    hole_box.points(&mut corners).map_err(cv("a hole's corners"))?;
-                    let corners: core::Vector<Point> = corners
-                        .iter()
-                        .map(|c| Point::new(c.x.round() as i32, c.y.round() as i32))
-                        .collect();
-                    imgproc::fill_convex_poly(&mut image, &corners, hole, imgproc::LINE_AA, 0)
-                        .map_err(cv("punch a hole"))?;
-                }
+                imgproc::ellipse_rotated_rect(&mut image, hole_box, hole, imgproc::FILLED, imgproc::LINE_AA)
+                    .map_err(cv("punch a hole"))?;
                 u += pitch;
             }
         }
