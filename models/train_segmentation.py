@@ -26,7 +26,8 @@ W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
 [0, 1].
 
 Run (from the project's root):
-    cargo run --release -- render-dataset target/render-train --count 2000 --seed 11
+    cargo run --release -- render-dataset target/render-train --count 2000 --seed 11 \
+        --min-cables 2 --max-cables 8 --min-diameter-px 5 --max-diameter-px 14
     python3 -m venv .venv-train
     .venv-train/bin/pip install -r models/requirements.txt
     nice .venv-train/bin/python models/train_segmentation.py \
@@ -358,9 +359,9 @@ def main() -> int:
                         help="the cables-dev folder (default: ../shared/data/cables-dev from the project's root)")
     parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx")
     parser.add_argument("--seed", type=int, default=7)
-    parser.add_argument("--steps", type=int, default=450)
-    parser.add_argument("--batch", type=int, default=8)
-    parser.add_argument("--crop", type=int, default=128, help="side of the square training crops, in network pixels")
+    parser.add_argument("--steps", type=int, default=1800)
+    parser.add_argument("--batch", type=int, default=16)
+    parser.add_argument("--crop", type=int, default=160, help="side of the square training crops, in network pixels")
     parser.add_argument("--lr", type=float, default=4e-3)
     parser.add_argument("--synthetic", type=Path, help="a folder written by `cablecell render-dataset` (required to train)")
     parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")

@@ -24,7 +24,7 @@ use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSenso
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::TAXEL_COUNT;
 use crate::perception::vision::Pipeline;
-use crate::perception::vision::network::{LazyNetwork, runtime_library};
+use crate::perception::vision::network::{DEFAULT_THRESHOLD, LazyNetwork, runtime_library};
 use crate::sim::emulator::FaultSwitch;
 use crate::sim::emulator::pg70::{self, Pg70Emulator};
 use crate::sim::emulator::tactile::{self, TactileEmulator};
@@ -229,7 +229,8 @@ impl Cell {
                 LazyNetwork::new(
                     vision.model.clone(),
                     runtime_library(vision.onnxruntime.as_deref()),
-                ),
+                )
+                .tuned(DEFAULT_THRESHOLD, vision.net_scale),
                 camera_config
                     .calibration
                     .as_ref()

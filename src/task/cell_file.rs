@@ -11,6 +11,7 @@ use serde::{Deserialize, Deserializer};
 
 use crate::hw::arm::WorkspaceBox;
 use crate::perception::tactile::TAXEL_COUNT;
+use crate::perception::vision::network::DEFAULT_INPUT_SCALE;
 use crate::sim::emulator::{Fault, pg70, tactile};
 
 use super::validate::{
@@ -517,6 +518,19 @@ pub enum DetectorBackend {
     Vision(VisionDetectorConfig),
 }
 
+fn default_net_scale() -> f64 {
+    DEFAULT_INPUT_SCALE
+}
+
+fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+    let scale = f64::deserialize(deserializer)?;
+    if scale > 0.0 && scale <= 2.0 {
+        Ok(scale)
+    } else {
+        Err(D::Error::custom(format!("net_scale {scale} is outside (0, 2]")))
+    }
+}
+
 /// The vision detector: the pipeline's settings, and what turns a grasp
 /// point in the image into a grasp frame in the base frame.
 #[derive(Debug, Clone, Deserialize)]
@@ -537,6 +551,11 @@ pub struct VisionDetectorConfig {
     /// all work is bounded to it.
     #[serde(default)]
     pub roi_px: Option<[i32; 4]>,
+    /// The network's input side over the image's (default
+    /// [`DEFAULT_INPUT_SCALE`]): smaller is faster, larger keeps thin
+    /// cables in a small region whole.
+    #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
+    pub net_scale: f64,
     /// The plane the cable lies in, known from the fixture (the paper's
     /// "known distance" of the cable from the camera): a grasp point's ray
     /// from the camera meets it at the grasp point in the base frame.
