@@ -27,7 +27,7 @@ W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
 
 Run (from the project's root):
     cargo run --release -- render-dataset target/render-train --count 2000 --seed 11 \
-        --min-cables 2 --max-cables 8 --min-diameter-px 5 --max-diameter-px 14
+        --min-cables 2 --max-cables 8 --min-diameter-px 4 --max-diameter-px 12
     python3 -m venv .venv-train
     .venv-train/bin/pip install -r models/requirements.txt
     nice .venv-train/bin/python models/train_segmentation.py \
