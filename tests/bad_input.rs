@@ -177,7 +177,11 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
     let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("cell.toml");
-    std::fs::write(&path, text.replacen("net_scale = 0.5", "net_scale = 3.0", 1)).expect("write");
+    std::fs::write(
+        &path,
+        text.replacen("net_scale = 0.5", "net_scale = 3.0", 1),
+    )
+    .expect("write");
     let out = cablecell(&["check", path.to_str().expect("utf-8")]);
     assert_eq!(out.status.code(), Some(BAD_INPUT));
     let err = String::from_utf8_lossy(&out.stderr);

@@ -527,7 +527,9 @@ fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error
     if scale > 0.0 && scale <= 2.0 {
         Ok(scale)
     } else {
-        Err(D::Error::custom(format!("net_scale {scale} is outside (0, 2]")))
+        Err(D::Error::custom(format!(
+            "net_scale {scale} is outside (0, 2]"
+        )))
     }
 }
 

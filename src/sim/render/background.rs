@@ -354,23 +354,42 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
     let (w, h) = (f64::from(width), f64::from(height));
     for _ in 0..rng.random_range(1..=3) {
         let paper = sheet_colour(rng);
-        let angle = rng.random_range(-0.25..0.25_f64) + f64::from(rng.random_range(0..4)) * PI / 2.0;
+        let angle =
+            rng.random_range(-0.25..0.25_f64) + f64::from(rng.random_range(0..4)) * PI / 2.0;
         let (sin, cos) = angle.sin_cos();
         // The sheet's near corner inside the image; it runs off the far side.
-        let corner = [rng.random_range(0.0..0.5 * w), rng.random_range(0.0..0.5 * h)];
-        let size = [rng.random_range(0.5..2.0) * w, rng.random_range(0.5..2.0) * h];
+        let corner = [
+            rng.random_range(0.0..0.5 * w),
+            rng.random_range(0.0..0.5 * h),
+        ];
+        let size = [
+            rng.random_range(0.5..2.0) * w,
+            rng.random_range(0.5..2.0) * h,
+        ];
         let at = |u: f64, v: f64| [corner[0] + u * cos - v * sin, corner[1] + u * sin + v * cos];
-        let outline: Vec<Point> = [[0.0, 0.0], [size[0], 0.0], [size[0], size[1]], [0.0, size[1]]]
-            .iter()
-            .map(|&[u, v]| {
-                let [x, y] = at(u, v);
-                Point::new(x.round() as i32, y.round() as i32)
-            })
-            .collect();
+        let outline: Vec<Point> = [
+            [0.0, 0.0],
+            [size[0], 0.0],
+            [size[0], size[1]],
+            [0.0, size[1]],
+        ]
+        .iter()
+        .map(|&[u, v]| {
+            let [x, y] = at(u, v);
+            Point::new(x.round() as i32, y.round() as i32)
+        })
+        .collect();
         let outline = core::Vector::<core::Vector<Point>>::from_iter([outline.into()]);
         let ink = Scalar::new(paper[0], paper[1], paper[2], 0.0);
-        imgproc::fill_poly(&mut image, &outline, ink, imgproc::LINE_AA, 0, Point::default())
-            .map_err(cv("lay a sheet"))?;
+        imgproc::fill_poly(
+            &mut image,
+            &outline,
+            ink,
+            imgproc::LINE_AA,
+            0,
+            Point::default(),
+        )
+        .map_err(cv("lay a sheet"))?;
         if rng.random_bool(0.5) {
             // Holes along the sheet's edge v = 0, like a binder's punch.
             let inset = rng.random_range(6.0..20.0);
@@ -386,8 +405,14 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
                     angle.to_degrees() as f32,
                 )
                 .map_err(cv("place a hole"))?;
-                imgproc::ellipse_rotated_rect(&mut image, hole_box, hole, imgproc::FILLED, imgproc::LINE_AA)
-                    .map_err(cv("punch a hole"))?;
+                imgproc::ellipse_rotated_rect(
+                    &mut image,
+                    hole_box,
+                    hole,
+                    imgproc::FILLED,
+                    imgproc::LINE_AA,
+                )
+                .map_err(cv("punch a hole"))?;
                 u += pitch;
             }
         }
