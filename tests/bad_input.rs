@@ -41,6 +41,20 @@ fn check_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
     (String::from_utf8(out.stderr).expect("utf-8"), path, dir)
 }
 
+/// Runs `check` on the shipped simulated cell with `from` replaced by
+/// `to`, and returns its error output, the file, and the folder that keeps
+/// the file alive.
+fn check_cell_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
+    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    assert!(text.contains(from), "the shipped cell holds {from:?}");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("cell.toml");
+    std::fs::write(&path, text.replacen(from, to, 1)).expect("write");
+    let out = cablecell(&["check", path.to_str().expect("utf-8 path")]);
+    assert_eq!(out.status.code(), Some(BAD_INPUT));
+    (String::from_utf8(out.stderr).expect("utf-8"), path, dir)
+}
+
 /// The line (1-based) of `needle` in the edited file.
 fn line_of(path: &Path, needle: &str) -> usize {
     let text = std::fs::read_to_string(path).expect("read");
@@ -119,17 +133,7 @@ fn broken_toml_gives_its_position() {
 
 #[test]
 fn unknown_backend_lists_the_known_ones() {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("cell.toml");
-    std::fs::write(
-        &path,
-        text.replace("[arm.backend.sim]", "[arm.backend.ur5]"),
-    )
-    .expect("write");
-    let out = cablecell(&["check", path.to_str().expect("utf-8")]);
-    assert_eq!(out.status.code(), Some(BAD_INPUT));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (err, _path, _dir) = check_cell_error("[arm.backend.sim]", "[arm.backend.ur5]");
     assert!(
         err.contains("arm.backend: unknown variant `ur5`, expected `sim`"),
         "{err}"
@@ -174,17 +178,7 @@ fn check_accepts_the_shipped_files() {
 
 #[test]
 fn a_network_input_size_out_of_range_is_refused_at_its_line() {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("cell.toml");
-    std::fs::write(
-        &path,
-        text.replacen("net_scale = 0.5", "net_scale = 3.0", 1),
-    )
-    .expect("write");
-    let out = cablecell(&["check", path.to_str().expect("utf-8")]);
-    assert_eq!(out.status.code(), Some(BAD_INPUT));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (err, path, _dir) = check_cell_error("net_scale = 0.5", "net_scale = 3.0");
     let line = line_of(&path, "net_scale = 3.0");
     assert!(err.contains(&format!(":{line}:")), "{err}");
     assert!(err.contains("net_scale 3 is outside (0, 2]"), "{err}");

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, runtime_library,
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE, runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
@@ -65,7 +65,7 @@ fn probability(text: &str) -> Result<f32, String> {
 }
 
 fn input_scale(text: &str) -> Result<f64, String> {
-    number_in(text, 0.0, 2.0)
+    number_in(text, 0.0, MAX_INPUT_SCALE)
 }
 
 fn length_px(text: &str) -> Result<f64, String> {

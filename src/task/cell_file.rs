@@ -11,7 +11,7 @@ use serde::{Deserialize, Deserializer};
 
 use crate::hw::arm::WorkspaceBox;
 use crate::perception::tactile::TAXEL_COUNT;
-use crate::perception::vision::network::DEFAULT_INPUT_SCALE;
+use crate::perception::vision::network::{DEFAULT_INPUT_SCALE, input_scale_is_valid};
 use crate::sim::emulator::{Fault, pg70, tactile};
 
 use super::validate::{
@@ -524,7 +524,7 @@ fn default_net_scale() -> f64 {
 
 fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
     let scale = f64::deserialize(deserializer)?;
-    if scale > 0.0 && scale <= 2.0 {
+    if input_scale_is_valid(scale) {
         Ok(scale)
     } else {
         Err(D::Error::custom(format!(

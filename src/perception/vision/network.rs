@@ -42,6 +42,15 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// (README, the sweep table).
 pub const DEFAULT_INPUT_SCALE: f64 = 0.375;
 
+/// The largest input scale the network is run at: twice the image's size
+/// is already far past what the model was trained on.
+pub const MAX_INPUT_SCALE: f64 = 2.0;
+
+/// Whether `scale` is an input scale the network can run at: (0, 2].
+pub fn input_scale_is_valid(scale: f64) -> bool {
+    scale > 0.0 && scale <= MAX_INPUT_SCALE
+}
+
 /// The model's input and output names.
 const INPUT: &str = "bgr";
 
@@ -207,7 +216,7 @@ impl SegmentationNet {
                 ),
             });
         }
-        if !(self.input_scale > 0.0 && self.input_scale <= 2.0) {
+        if !input_scale_is_valid(self.input_scale) {
             return Err(NetworkError::Image {
                 reason: format!("input scale {} is outside (0, 2]", self.input_scale),
             });
