@@ -183,3 +183,14 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
     assert!(err.contains(&format!(":{line}:")), "{err}");
     assert!(err.contains("net_scale 3 is outside (0, 2]"), "{err}");
 }
+
+#[test]
+fn a_negative_straight_edge_radius_is_refused_at_its_line() {
+    let (err, path, _dir) = check_cell_error(
+        "straight_edge_radius_px = 0.0",
+        "straight_edge_radius_px = -1.0",
+    );
+    let line = line_of(&path, "straight_edge_radius_px = -1.0");
+    assert!(err.contains(&format!(":{line}:")), "{err}");
+    assert!(err.contains("expected a number ≥ 0, found -1"), "{err}");
+}

@@ -47,6 +47,10 @@ pub struct VisionArgs {
     /// are shorter than this (px): too little of them is in view to grasp.
     #[arg(long, default_value_t = VisionConfig::default().min_border_cable_length_px, value_parser = length_px)]
     pub min_border_length_px: f64,
+    /// Drop detections straighter than an arc of this radius (px): edges of
+    /// paper and tables; 0 keeps them (for a cable held taut).
+    #[arg(long, default_value_t = VisionConfig::default().straight_edge_radius_px, value_parser = length_px)]
+    pub straight_edge_radius_px: f64,
 }
 
 fn number_in(text: &str, low: f64, high: f64) -> Result<f64, String> {
@@ -111,6 +115,7 @@ impl VisionArgs {
             superpixel_widths: self.superpixel_widths,
             min_cable_length_px: self.min_length_px,
             min_border_cable_length_px: self.min_border_length_px,
+            straight_edge_radius_px: self.straight_edge_radius_px,
             ..VisionConfig::default()
         };
         Pipeline::new(config)

@@ -518,6 +518,10 @@ pub enum DetectorBackend {
     Vision(VisionDetectorConfig),
 }
 
+fn default_straight_edge_radius_px() -> f64 {
+    VisionConfig::default().straight_edge_radius_px
+}
+
 fn default_net_scale() -> f64 {
     DEFAULT_INPUT_SCALE
 }
@@ -558,6 +562,15 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
+    /// Detections straighter than an arc of this radius (px) are dropped
+    /// as edges of paper and tables (default
+    /// [`VisionConfig::straight_edge_radius_px`]); 0 keeps them: a cable
+    /// held taut between supports is straight.
+    #[serde(
+        default = "default_straight_edge_radius_px",
+        deserialize_with = "non_negative"
+    )]
+    pub straight_edge_radius_px: f64,
     /// The plane the cable lies in, known from the fixture (the paper's
     /// "known distance" of the cable from the camera): a grasp point's ray
     /// from the camera meets it at the grasp point in the base frame.
@@ -707,6 +720,7 @@ impl VisionDetectorConfig {
             roi_px: self
                 .roi_px
                 .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
+            straight_edge_radius_px: self.straight_edge_radius_px,
             ..VisionConfig::default()
         }
     }

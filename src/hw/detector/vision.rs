@@ -53,6 +53,9 @@ impl CableDetector for VisionDetector {
             timings_ms = ?output.timings_ms,
             "vision"
         );
+        for note in &output.notes {
+            tracing::warn!(note = note.as_str(), "vision");
+        }
         let mut found: Vec<(f64, CableDetection)> = output
             .cables
             .iter()

@@ -50,6 +50,13 @@ pub struct VisionConfig {
     /// this are dropped too: too little of such a cable is in view to
     /// grasp it, and the middle of what is seen is not the cable's middle.
     pub min_border_cable_length_px: f64,
+    /// Paths straighter than an arc of this radius (px), and within 3 px
+    /// of straight, are dropped: the network takes edges of paper, folders
+    /// and tables for cables, and a cable lying loose is never that
+    /// straight (the straightest in cables-dev's training photographs bends
+    /// like a 730 px arc). 0 keeps every path: for a cell whose cable is
+    /// held taut.
+    pub straight_edge_radius_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
     /// instances are looked for.
     pub min_blob_area_px: f64,
@@ -69,6 +76,7 @@ impl Default for VisionConfig {
             roi_px: None,
             min_cable_length_px: 40.0,
             min_border_cable_length_px: 80.0,
+            straight_edge_radius_px: 1500.0,
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
             superpixel_widths: super::superpixels::DEFAULT_REGION_WIDTHS,
@@ -127,7 +135,8 @@ pub struct VisionOutput {
     /// Milliseconds per stage, in order: "prepare", "mask", "instances",
     /// "spline", "instance_masks".
     pub timings_ms: Vec<(&'static str, f64)>,
-    /// What a user should know about this run (fallbacks taken).
+    /// What a user should know about this run (fallbacks taken,
+    /// detections dropped as edges).
     pub notes: Vec<String>,
 }
 
@@ -137,6 +146,9 @@ pub struct VisionOutput {
 pub struct MaskInstances {
     pub cables: Vec<CableInstance>,
     pub cable_width_px: f64,
+    /// Paths dropped as straight edges (see
+    /// [`VisionConfig::straight_edge_radius_px`]).
+    pub straight_dropped: usize,
     /// Milliseconds for "instances", "spline", "instance_masks".
     pub timings_ms: Vec<(&'static str, f64)>,
 }
@@ -240,6 +252,12 @@ impl Pipeline {
 
         let found = self.cables_in(&work, &mask_roi, roi, full)?;
         timings_ms.extend(found.timings_ms);
+        if found.straight_dropped > 0 {
+            notes.push(format!(
+                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc (straight_edge_radius_px; 0 keeps them)",
+                found.straight_dropped, self.config.straight_edge_radius_px
+            ));
+        }
         let mut union_mask = mask::zeros_u8(full.height, full.width)?;
         for cable in &found.cables {
             let mut next = Mat::default();
@@ -324,6 +342,7 @@ impl Pipeline {
         let offset = [f64::from(roi.x), f64::from(roi.y)];
         let shift = |p: [f64; 2]| [p[0] + offset[0], p[1] + offset[1]];
         let mut fitted = Vec::new();
+        let mut straight_dropped = 0;
         for path in paths {
             let n = spline::control_points_for_length(path.length_px);
             let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
@@ -333,6 +352,14 @@ impl Pipeline {
                 *c = shift(*c);
             }
             let samples_px = spline.sample(self.config.samples_per_cable);
+            if looks_like_edge(
+                &samples_px,
+                path.length_px,
+                self.config.straight_edge_radius_px,
+            ) {
+                straight_dropped += 1;
+                continue;
+            }
             let grasp_px = spline.point(0.5);
             let direction_rad = spline.grasp_direction_rad();
             fitted.push((path, spline, samples_px, grasp_px, direction_rad));
@@ -357,9 +384,25 @@ impl Pipeline {
         Ok(MaskInstances {
             cables,
             cable_width_px: found.width_px,
+            straight_dropped,
             timings_ms,
         })
     }
+}
+
+/// How far from straight an edge's detection can be: mask noise and lens
+/// distortion bend a paper edge's by up to 2 px in cables-dev; a cable that
+/// departs more from its chord is visibly bent, however long.
+const EDGE_MAX_SAGITTA_PX: f64 = 3.0;
+
+/// Whether a detection (points along it, `length_px` long) is straight
+/// enough to be an edge: it bends less than an arc of `radius_px` (0: never)
+/// and stays within [`EDGE_MAX_SAGITTA_PX`] of its chord.
+fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bool {
+    let sagitta_px = spline::chord_sagitta_px(points_px);
+    radius_px > 0.0
+        && sagitta_px < EDGE_MAX_SAGITTA_PX
+        && spline::arc_radius_px(length_px, sagitta_px) > radius_px
 }
 
 /// The pixels of `mask` within `thickness` of the path.
@@ -412,6 +455,15 @@ mod tests {
             centreline_px,
             bgr,
             width_px: 8,
+        }
+    }
+
+    /// The defaults, but straight detections kept: most cables here are
+    /// straight segments.
+    fn keep_straight() -> VisionConfig {
+        VisionConfig {
+            straight_edge_radius_px: 0.0,
+            ..VisionConfig::default()
         }
     }
 
@@ -471,7 +523,7 @@ mod tests {
             1,
         )
         .unwrap();
-        let out = detect(&scene.image, VisionConfig::default());
+        let out = detect(&scene.image, keep_straight());
         assert!(out.plain_background);
         assert_eq!(out.mask_used, MaskMethod::Classical);
         assert_each_followed(&out, std::slice::from_ref(&curve), 2.0);
@@ -509,7 +561,7 @@ mod tests {
             2,
         )
         .unwrap();
-        let out = detect(&scene.image, VisionConfig::default());
+        let out = detect(&scene.image, keep_straight());
         assert_each_followed(&out, &[a, b], 3.0);
         for c in &out.cables {
             assert_eq!(c.mask.size().unwrap(), scene.image.size().unwrap());
@@ -525,7 +577,7 @@ mod tests {
             .iter()
             .map(|c| c.centreline_px.clone())
             .collect();
-        let out = detect(&scene.image, VisionConfig::default());
+        let out = detect(&scene.image, keep_straight());
         assert!(out.plain_background, "{:?}", out.background);
         assert_each_followed(&out, &curves, 3.0);
     }
@@ -545,7 +597,7 @@ mod tests {
             4,
         )
         .unwrap();
-        let out = detect(&scene.image, VisionConfig::default());
+        let out = detect(&scene.image, keep_straight());
         assert_each_followed(&out, &[a, b], 3.0);
     }
 
@@ -559,7 +611,7 @@ mod tests {
             },
         ] {
             let scene = draw_scene(480, 640, kind, Vec::new(), 5).unwrap();
-            let out = detect(&scene.image, VisionConfig::default());
+            let out = detect(&scene.image, keep_straight());
             assert!(
                 out.cables.is_empty(),
                 "{kind:?}: {} cables",
@@ -609,13 +661,13 @@ mod tests {
             for instances in [InstanceMethod::Skeleton, InstanceMethod::Superpixels] {
                 let config = VisionConfig {
                     instances,
-                    ..VisionConfig::default()
+                    ..keep_straight()
                 };
                 let out = Pipeline::new(config).detect(&image, None);
                 assert!(out.is_ok(), "{name}: {out:?}");
             }
         }
-        let mut p = Pipeline::new(VisionConfig::default());
+        let mut p = Pipeline::new(keep_straight());
         assert!(matches!(
             p.detect(&Mat::default(), None),
             Err(VisionError::EmptyImage { .. })
@@ -645,7 +697,7 @@ mod tests {
             &scene.image,
             VisionConfig {
                 roi_px: Some(roi),
-                ..VisionConfig::default()
+                ..keep_straight()
             },
         );
         assert_each_followed(&out, std::slice::from_ref(&inside), 2.5);
@@ -659,7 +711,7 @@ mod tests {
         assert_eq!(*out.union_mask.at_2d::<u8>(50, 100).unwrap(), 0);
         let off = VisionConfig {
             roi_px: Some(Rect::new(700, 500, 10, 10)),
-            ..VisionConfig::default()
+            ..keep_straight()
         };
         assert!(matches!(
             Pipeline::new(off).detect(&scene.image, None),
@@ -682,17 +734,52 @@ mod tests {
         .unwrap();
         let keep_all = VisionConfig {
             min_border_cable_length_px: 0.0,
-            ..VisionConfig::default()
+            ..keep_straight()
         };
         assert_eq!(detect(&scene.image, keep_all).cables.len(), 2);
         let out = detect(
             &scene.image,
             VisionConfig {
                 min_border_cable_length_px: 80.0,
-                ..VisionConfig::default()
+                ..keep_straight()
             },
         );
         assert_each_followed(&out, std::slice::from_ref(&loose), 2.5);
+    }
+
+    #[test]
+    fn a_straight_detection_is_dropped_as_an_edge_unless_asked_to_keep_it() {
+        use std::f64::consts::FRAC_PI_2;
+        // A ruler-straight 300 px line; a 110 px piece of cable bent like a
+        // 600 px arc (2.5 px from straight); a 420 px cable bowed like a
+        // 3000 px arc (7 px from straight).
+        let edge = segment_px([100.0, 80.0], [400.0, 80.0]);
+        let short_bent = arc_px([450.0, 900.0], 600.0, -FRAC_PI_2 - 0.09, -FRAC_PI_2 + 0.09);
+        let long_bowed = arc_px(
+            [320.0, 3400.0],
+            3000.0,
+            -FRAC_PI_2 - 0.07,
+            -FRAC_PI_2 + 0.07,
+        );
+        let cables = [edge, short_bent, long_bowed];
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 210.0 },
+            cables.iter().map(|c| cable(c.clone(), [20.0; 3])).collect(),
+            8,
+        )
+        .unwrap();
+        let out = detect(&scene.image, VisionConfig::default());
+        assert_each_followed(&out, &cables[1..], 2.5);
+        assert!(
+            out.notes.iter().any(|n| n.contains("1 straight detection")),
+            "{:?}",
+            out.notes
+        );
+        let kept = detect(&scene.image, keep_straight());
+        assert_each_followed(&kept, &cables, 2.5);
+        assert!(kept.notes.is_empty(), "{:?}", kept.notes);
     }
 
     /// Stands in for the segmentation network: the mask of the drawn cables.
@@ -727,7 +814,7 @@ mod tests {
         imgproc::cvt_color(&truth.image, &mut truth_mask, imgproc::COLOR_BGR2GRAY, 0).unwrap();
 
         let mut net = KnownMask(truth_mask);
-        let mut auto = Pipeline::new(VisionConfig::default());
+        let mut auto = Pipeline::new(keep_straight());
         let out = auto.detect(&scene.image, Some(&mut net)).unwrap();
         assert!(!out.plain_background, "{:?}", out.background);
         assert_eq!(out.mask_used, MaskMethod::Network);
@@ -743,7 +830,7 @@ mod tests {
 
         let mut network_only = Pipeline::new(VisionConfig {
             mask: MaskMethod::Network,
-            ..VisionConfig::default()
+            ..keep_straight()
         });
         assert!(matches!(
             network_only.detect(&scene.image, None),
@@ -770,7 +857,7 @@ mod tests {
             &scene.image,
             VisionConfig {
                 instances: InstanceMethod::Superpixels,
-                ..VisionConfig::default()
+                ..keep_straight()
             },
         );
         // Each cable is walked through the crossing, but the walk's nodes

@@ -180,6 +180,33 @@ impl BSpline {
     }
 }
 
+/// The largest distance of `points_px` from the chord joining their ends:
+/// an arc's sagitta, 0 for a straight line.
+pub fn chord_sagitta_px(points_px: &[[f64; 2]]) -> f64 {
+    let (Some(a), Some(b)) = (points_px.first(), points_px.last()) else {
+        return 0.0;
+    };
+    let chord = [b[0] - a[0], b[1] - a[1]];
+    let chord_px = chord[0].hypot(chord[1]);
+    points_px
+        .iter()
+        .map(|p| {
+            let (dx, dy) = (p[0] - a[0], p[1] - a[1]);
+            if chord_px > 0.0 {
+                (dx * chord[1] - dy * chord[0]).abs() / chord_px
+            } else {
+                dx.hypot(dy)
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The radius of the circular arc `length_px` long whose sagitta is
+/// `sagitta_px` (L²/8h, for arcs much shorter than their circle).
+pub fn arc_radius_px(length_px: f64, sagitta_px: f64) -> f64 {
+    length_px * length_px / (8.0 * sagitta_px)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,6 +260,30 @@ mod tests {
         assert_eq!(two.degree, 1);
         let mid = two.point(0.5);
         assert!((mid[0] - 5.0).abs() < 1e-6, "{mid:?}");
+    }
+
+    #[test]
+    fn an_arcs_sagitta_gives_back_its_radius_and_a_line_has_none() {
+        for radius_px in [300.0, 1000.0, 3000.0] {
+            let angle_rad: f64 = 150.0 / radius_px;
+            let arc: Vec<[f64; 2]> = (0..=50)
+                .map(|i| {
+                    let t = angle_rad * (i as f64 / 50.0 - 0.5);
+                    [radius_px * t.sin(), radius_px * t.cos()]
+                })
+                .collect();
+            let found = arc_radius_px(radius_px * angle_rad, chord_sagitta_px(&arc));
+            assert!(
+                (found / radius_px - 1.0).abs() < 0.02,
+                "radius {radius_px}: {found}"
+            );
+        }
+        let line: Vec<[f64; 2]> = (0..10).map(|i| [i as f64, 2.0 * i as f64]).collect();
+        assert_eq!(chord_sagitta_px(&line), 0.0);
+        assert_eq!(arc_radius_px(20.0, 0.0), f64::INFINITY);
+        assert_eq!(chord_sagitta_px(&[]), 0.0);
+        // A closed loop: the distance from its ends.
+        assert_eq!(chord_sagitta_px(&[[1.0, 1.0], [4.0, 5.0], [1.0, 1.0]]), 5.0);
     }
 
     proptest! {
