@@ -116,6 +116,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         false,
     );
     let (masks, overlay) = (dir.path().join("masks"), dir.path().join("overlay"));
+    // The drawn cable is ruler-straight: kept only when asked.
     let out = cablecell(&[
         "detect",
         text(&image),
@@ -124,6 +125,8 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         text(&masks),
         "--overlay",
         text(&overlay),
+        "--straight-edge-radius-px",
+        "0",
     ]);
     assert_eq!(
         out.status.code(),
@@ -157,6 +160,15 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         assert_eq!((mask.cols(), mask.rows()), (640, 480), "{file}");
     }
     assert!(overlay.join("one.png").is_file());
+
+    let by_default = cablecell(&["detect", text(&image), "--json"]);
+    let reports: serde_json::Value = serde_json::from_slice(&by_default.stdout).expect("JSON");
+    assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(0));
+    let notes = reports[0]["notes"].to_string();
+    assert!(
+        notes.contains("1 straight detection(s) as edges"),
+        "{notes}"
+    );
 }
 
 #[test]
@@ -217,7 +229,13 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         ],
         true,
     );
-    let out = cablecell(&["eval-vision", text(dir.path()), "--json"]);
+    let out = cablecell(&[
+        "eval-vision",
+        text(dir.path()),
+        "--json",
+        "--straight-edge-radius-px",
+        "0",
+    ]);
     assert_eq!(
         out.status.code(),
         Some(0),
