@@ -34,9 +34,11 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 
 /// Fraction of the (downscaled, blurred) image that must lie within
 /// [`PLAIN_NEAR_LAB`] of the median colour for the background to count as
-/// plain. Cables rarely cover more than 15% of a view; on the cables-dev
-/// photographs (wood, cloth, prints) the fraction ranges well below this.
-pub const PLAIN_MIN_FRACTION: f64 = 0.8;
+/// plain: cables rarely cover more than 15% of a view. The cables-dev
+/// photographs (wood, cloth, prints, paper with a table's edge in view)
+/// score 0.52 to 0.81, and on the training ones that score 0.80 and 0.81
+/// the network does better than the classical mask.
+pub const PLAIN_MIN_FRACTION: f64 = 0.85;
 
 /// Side, in pixels of the image shrunk by [`STATS_DOWNSCALE`], of the
 /// window whose median colour is the local background: 15 (60 px at full
