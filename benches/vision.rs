@@ -17,13 +17,18 @@ use opencv::prelude::*;
 
 fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) {
     let config = VisionConfig::default();
-    let (m, _) = mask::classical_mask(image, config.min_blob_area_px).expect("classical mask");
+    let background = mask::background_stats(image).expect("background statistics");
+    let (m, _) =
+        mask::classical_mask(image, &background, config.min_blob_area_px).expect("classical mask");
     let instance_mask = truth_mask.unwrap_or(&m);
     let found =
         skeleton::paths_from_mask(instance_mask, config.min_cable_length_px).expect("paths");
     let mut group = c.benchmark_group(format!("vision/{name}"));
     group.bench_function("mask (classical)", |b| {
-        b.iter(|| mask::classical_mask(black_box(image), config.min_blob_area_px))
+        b.iter(|| {
+            let background = mask::background_stats(black_box(image))?;
+            mask::classical_mask(image, &background, config.min_blob_area_px)
+        })
     });
     group.bench_function("instances (skeleton)", |b| {
         b.iter(|| skeleton::paths_from_mask(black_box(instance_mask), config.min_cable_length_px))

@@ -212,35 +212,29 @@ fn local_background_lab(bgr: &Mat) -> Result<Mat, VisionError> {
     continuous(&full)
 }
 
-/// The classical mask (CV_8U, 0/255, the image's size) and what it learnt
-/// about the background. `min_blob_area_px`: connected blobs smaller than
-/// this are dropped as noise.
+/// The classical mask (CV_8U, 0/255, the image's size): each pixel's colour
+/// distance from the background around it (so that a light's falloff across
+/// a plain table is not taken for cables), thresholded by Otsu. Returns
+/// `background` (from [`background_stats`]) with the threshold used.
+/// `min_blob_area_px`: connected blobs smaller than this are dropped as
+/// noise.
 pub fn classical_mask(
     bgr: &Mat,
+    background: &BackgroundStats,
     min_blob_area_px: f64,
 ) -> Result<(Mat, BackgroundStats), VisionError> {
-    let mut stats = background_stats(bgr)?;
     let lab = blurred_lab(bgr)?;
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
-    let to_byte = |d: f64| d.round().min(255.0) as u8;
-    let distance: Vec<u8> = if stats.plain {
-        let bg = stats.background_lab;
-        bytes
-            .chunks_exact(3)
-            .map(|px| to_byte(lab_distance(px, bg)))
-            .collect()
-    } else {
-        let local = local_background_lab(bgr)?;
-        let local_bytes = local.data_bytes().map_err(cv("read Lab pixels"))?;
-        bytes
-            .chunks_exact(3)
-            .zip(local_bytes.chunks_exact(3))
-            .map(|(px, bg)| {
-                let bg = [f64::from(bg[0]), f64::from(bg[1]), f64::from(bg[2])];
-                to_byte(lab_distance(px, bg))
-            })
-            .collect()
-    };
+    let local = local_background_lab(bgr)?;
+    let local_bytes = local.data_bytes().map_err(cv("read Lab pixels"))?;
+    let distance: Vec<u8> = bytes
+        .chunks_exact(3)
+        .zip(local_bytes.chunks_exact(3))
+        .map(|(px, bg)| {
+            let bg = [f64::from(bg[0]), f64::from(bg[1]), f64::from(bg[2])];
+            lab_distance(px, bg).round().min(255.0) as u8
+        })
+        .collect();
     let distance_mat = Mat::new_rows_cols_with_data(bgr.rows(), bgr.cols(), &distance)
         .map_err(cv("wrap colour distance"))?;
     let mut scratch = Mat::default();
@@ -253,7 +247,10 @@ pub fn classical_mask(
     )
     .map_err(cv("Otsu threshold"))?;
     let threshold_lab = otsu.max(MIN_THRESHOLD_LAB);
-    stats.threshold_lab = threshold_lab;
+    let stats = BackgroundStats {
+        threshold_lab,
+        ..background.clone()
+    };
     let mut raw = Mat::default();
     imgproc::threshold(
         &distance_mat,
@@ -415,11 +412,54 @@ mod tests {
     #[test]
     fn a_dark_line_on_a_light_plain_table_is_found() {
         let img = plain_with_line(220.0, 30.0);
-        let (mask, stats) = classical_mask(&img, 20.0).unwrap();
+        let (mask, stats) = classical_mask(&img, &background_stats(&img).unwrap(), 20.0).unwrap();
         assert!(stats.plain, "{stats:?}");
         let on = *mask.at_2d::<u8>(60, 80).unwrap();
         let off = *mask.at_2d::<u8>(20, 80).unwrap();
         assert_eq!((on, off), (255, 0));
+    }
+
+    #[test]
+    fn a_lights_falloff_over_a_plain_table_is_not_taken_for_cables() {
+        // A dark table lit from its middle: 100 there, 65 in the corners,
+        // plain all the same; a dull blue cable across it, as far from
+        // the table's colour as the corners are.
+        let (rows, cols) = (240, 320);
+        let mut img =
+            Mat::new_rows_cols_with_default(rows, cols, core::CV_8UC3, Scalar::all(0.0)).unwrap();
+        for y in 0..rows {
+            for x in 0..cols {
+                let r = (f64::from(x) / f64::from(cols) - 0.5)
+                    .hypot(f64::from(y) / f64::from(rows) - 0.5);
+                let gray = (100.0 - 35.0 * (r / 0.7071).powi(2)) as u8;
+                *img.at_2d_mut::<core::Vec3b>(y, x).unwrap() = core::Vec3b::from([gray; 3]);
+            }
+        }
+        imgproc::line(
+            &mut img,
+            Point::new(20, 120),
+            Point::new(300, 120),
+            Scalar::new(110.0, 70.0, 50.0, 0.0),
+            6,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        let background = background_stats(&img).unwrap();
+        assert!(background.plain, "{background:?}");
+        let (mask, _) = classical_mask(&img, &background, 20.0).unwrap();
+        assert_eq!(*mask.at_2d::<u8>(120, 160).unwrap(), 255);
+        let mut off_line = mask.clone();
+        imgproc::rectangle(
+            &mut off_line,
+            core::Rect::new(0, 105, cols, 30),
+            Scalar::all(0.0),
+            -1,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        assert_eq!(core::count_non_zero(&off_line).unwrap(), 0);
     }
 
     #[test]

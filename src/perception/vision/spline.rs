@@ -80,6 +80,8 @@ impl BSpline {
     /// cumulative distance, scaled to [0, 1], is their parameter, so s is
     /// close to the fraction of length from the first point. Degree 3 when
     /// there are enough points; `None` for fewer than two distinct points.
+    /// At most one control point per two points, so that sparse points (a
+    /// superpixel walk's nodes) cannot make the curve swing between them.
     pub fn fit(points_px: &[[f64; 2]], control_points: usize) -> Option<BSpline> {
         let finite: Vec<[f64; 2]> = points_px
             .iter()
@@ -101,7 +103,7 @@ impl BSpline {
         }
         let m = finite.len();
         let degree = 3.min(m - 1);
-        let n = control_points.clamp(degree + 1, m.max(degree + 1));
+        let n = control_points.clamp(degree + 1, (m / 2).max(degree + 1));
         let interior = n - degree - 1;
         let mut knots = vec![0.0; degree + 1];
         knots.extend((1..=interior).map(|i| i as f64 / (interior + 1) as f64));

@@ -64,7 +64,7 @@ fn graph(image: &Mat, mask: &Mat, region_px: i32) -> Result<Nodes, VisionError> 
     let on = mask.data_bytes().map_err(cv("read mask"))?;
     let cols = usize::try_from(mask.cols()).unwrap_or(0);
 
-    // Nodes: the connected pieces of each superpixel within the mask (a
+    // Pieces: the connected parts of each superpixel within the mask (a
     // superpixel may reach over the background to a second cable).
     let n = label.len();
     let mut parent: Vec<usize> = (0..n).collect();
@@ -91,44 +91,76 @@ fn graph(image: &Mat, mask: &Mat, region_px: i32) -> Result<Nodes, VisionError> 
             }
         }
     }
-    let mut node_of_root = vec![usize::MAX; n];
-    let mut node_at = vec![usize::MAX; n];
+    let mut piece_of_root = vec![usize::MAX; n];
+    let mut piece_at = vec![usize::MAX; n];
     let mut sums: Vec<[f64; 3]> = Vec::new();
     for i in 0..n {
         if on[i] == 0 {
             continue;
         }
         let r = root(&mut parent, i);
-        if node_of_root[r] == usize::MAX {
-            node_of_root[r] = sums.len();
+        if piece_of_root[r] == usize::MAX {
+            piece_of_root[r] = sums.len();
             sums.push([0.0; 3]);
         }
-        let id = node_of_root[r];
-        node_at[i] = id;
+        let id = piece_of_root[r];
+        piece_at[i] = id;
         sums[id][0] += (i % cols) as f64;
         sums[id][1] += (i / cols) as f64;
         sums[id][2] += 1.0;
     }
-    let centres_px: Vec<[f64; 2]> = sums.iter().map(|s| [s[0] / s[2], s[1] / s[2]]).collect();
     let mut pairs = HashSet::new();
     for i in 0..n {
-        let a = node_at[i];
+        let a = piece_at[i];
         if a == usize::MAX {
             continue;
         }
         for j in neighbours_of(i) {
-            let b = node_at[j];
+            let b = piece_at[j];
             if b != usize::MAX && b != a {
                 pairs.insert((a.min(b), a.max(b)));
             }
         }
     }
-    let mut neighbours = vec![Vec::new(); centres_px.len()];
+    let mut pieces_next_to = vec![Vec::new(); sums.len()];
     let mut pairs: Vec<(usize, usize)> = pairs.into_iter().collect();
     pairs.sort_unstable();
     for (a, b) in pairs {
-        neighbours[a].push(b);
-        neighbours[b].push(a);
+        pieces_next_to[a].push(b);
+        pieces_next_to[b].push(a);
+    }
+
+    // Slivers of mask in a superpixel mostly over the background (or the
+    // other side of a cable) would be nodes off the centre line that a walk
+    // zigzags through: they are no nodes, but still join their neighbours.
+    let min_node_px = f64::from(region_px * region_px) / 8.0;
+    let is_node: Vec<bool> = sums.iter().map(|s| s[2] >= min_node_px).collect();
+    let mut node_of_piece = vec![usize::MAX; sums.len()];
+    let mut centres_px: Vec<[f64; 2]> = Vec::new();
+    for (piece, s) in sums.iter().enumerate() {
+        if is_node[piece] {
+            node_of_piece[piece] = centres_px.len();
+            centres_px.push([s[0] / s[2], s[1] / s[2]]);
+        }
+    }
+    let mut neighbours = vec![Vec::new(); centres_px.len()];
+    for (piece, next) in pieces_next_to.iter().enumerate() {
+        let linked: Vec<usize> = next
+            .iter()
+            .filter(|&&p| is_node[p])
+            .map(|&p| node_of_piece[p])
+            .collect();
+        if is_node[piece] {
+            neighbours[node_of_piece[piece]].extend(linked);
+        } else {
+            for &a in &linked {
+                neighbours[a].extend(linked.iter().copied().filter(|&b| b != a));
+            }
+        }
+    }
+    for list in &mut neighbours {
+        list.sort_unstable();
+        list.dedup();
     }
     Ok(Nodes {
         centres_px,
