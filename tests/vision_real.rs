@@ -113,17 +113,17 @@ fn superpixel_instances_on_true_masks() {
     print_scores("superpixels/truth-mask", &scores);
     let only: Vec<ImageScore> = scores.iter().map(|(_, s)| s.clone()).collect();
     let summary = eval::summarize(&only);
-    // Measured: 34 of 45 counts right, instance DICE 0.934, centreline
-    // 0.94 px, grasp point 0.97 px.
+    // Measured: 39 of 45 counts right, instance DICE 0.953, centreline
+    // 0.89 px, grasp point 0.92 px.
     assert_eq!(summary.images, 45);
-    assert!(summary.count_accuracy >= 0.7, "{summary:?}");
-    assert!(summary.instance_dice >= 0.9, "{summary:?}");
+    assert!(summary.count_accuracy >= 0.8, "{summary:?}");
+    assert!(summary.instance_dice >= 0.93, "{summary:?}");
     assert!(
-        summary.centerline_px.is_some_and(|d| d <= 1.3),
+        summary.centerline_px.is_some_and(|d| d <= 1.2),
         "{summary:?}"
     );
     assert!(
-        summary.grasp_error_px.is_some_and(|d| d <= 1.4),
+        summary.grasp_error_px.is_some_and(|d| d <= 1.3),
         "{summary:?}"
     );
 }
