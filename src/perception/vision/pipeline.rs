@@ -602,6 +602,60 @@ mod tests {
         assert_each_followed(&out, &[a, b], 3.0);
     }
 
+    /// Points a pixel apart along a curve through `through_px` with heading
+    /// `heading_rad` there, turning by `turn_rad_per_px` per pixel,
+    /// `half_length_px` either way.
+    fn curve_through(
+        through_px: [f64; 2],
+        heading_rad: f64,
+        turn_rad_per_px: f64,
+        half_length_px: usize,
+    ) -> Vec<[f64; 2]> {
+        let mut walk = |sign: f64| {
+            let (mut p, mut heading) = (through_px, heading_rad);
+            let mut points = Vec::new();
+            for _ in 0..half_length_px {
+                p = [p[0] + sign * heading.cos(), p[1] + sign * heading.sin()];
+                heading += sign * turn_rad_per_px;
+                points.push(p);
+            }
+            points
+        };
+        let mut back = walk(-1.0);
+        back.reverse();
+        back.push(through_px);
+        back.extend(walk(1.0));
+        back
+    }
+
+    #[test]
+    fn cables_bending_through_a_thirty_degree_crossing_keep_to_themselves() {
+        // Both bend the same way through the crossing, as cables lying
+        // loose do: the skeleton between the crossing's two junctions runs
+        // between them, far from the sharper one's direction beyond.
+        let steep = curve_through([320.0, 240.0], -0.9, -1.0 / 150.0, 140);
+        let shallow = curve_through([320.0, 240.0], -0.4, -1.0 / 250.0, 200);
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 220.0 },
+            vec![
+                SyntheticCable {
+                    width_px: 10,
+                    ..cable(steep.clone(), [20.0; 3])
+                },
+                SyntheticCable {
+                    width_px: 10,
+                    ..cable(shallow.clone(), [150.0, 60.0, 40.0])
+                },
+            ],
+            4,
+        )
+        .unwrap();
+        let out = detect(&scene.image, VisionConfig::default());
+        assert_each_followed(&out, &[steep, shallow], 3.0);
+    }
+
     #[test]
     fn no_cable_is_an_empty_result() {
         for kind in [
