@@ -431,7 +431,8 @@ mod tests {
             for x in 0..cols {
                 let r = (f64::from(x) / f64::from(cols) - 0.5)
                     .hypot(f64::from(y) / f64::from(rows) - 0.5);
-                let gray = (100.0 - 35.0 * (r / 0.7071).powi(2)) as u8;
+                // r² / 0.5: 0 in the middle, 1 in the corners.
+                let gray = (100.0 - 35.0 * r * r / 0.5) as u8;
                 *img.at_2d_mut::<core::Vec3b>(y, x).unwrap() = core::Vec3b::from([gray; 3]);
             }
         }

@@ -611,7 +611,7 @@ mod tests {
         turn_rad_per_px: f64,
         half_length_px: usize,
     ) -> Vec<[f64; 2]> {
-        let mut walk = |sign: f64| {
+        let walk = |sign: f64| {
             let (mut p, mut heading) = (through_px, heading_rad);
             let mut points = Vec::new();
             for _ in 0..half_length_px {
