@@ -251,6 +251,14 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{e}"
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
+    assert_eq!(e["notes"].as_array().map(Vec::len), Some(0), "{e}");
+    // By default the drawn cables, ruler-straight, are dropped as edges,
+    // and the evaluation says so per image.
     let human = cablecell(&["eval-vision", text(dir.path())]);
-    assert!(String::from_utf8_lossy(&human.stdout).contains("instance count right"));
+    let printed = String::from_utf8_lossy(&human.stdout);
+    assert!(printed.contains("instance count right"), "{printed}");
+    assert!(
+        printed.contains("note: 00001: dropped 2 straight detection(s) as edges"),
+        "{printed}"
+    );
 }

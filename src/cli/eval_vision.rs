@@ -46,6 +46,9 @@ struct Evaluation {
     /// Per stage, and "total": median and 95th percentile among the rest.
     stage_ms: BTreeMap<&'static str, Summary>,
     per_image: Vec<(String, ImageScore)>,
+    /// What the pipeline said about an image (fallbacks taken, detections
+    /// dropped as edges), by image.
+    notes: Vec<(String, String)>,
 }
 
 /// An image with its ground truth, read once for all settings.
@@ -142,6 +145,7 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
     let mut pipeline = vision.pipeline();
     let mut network = vision.network();
     let mut per_image = Vec::new();
+    let mut notes = Vec::new();
     let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     for (k, sample) in samples.iter().enumerate() {
         if k == 0 {
@@ -160,6 +164,12 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
             .or_default()
             .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
         per_image.push((sample.stem.clone(), score(&output, &sample.truth)));
+        notes.extend(
+            output
+                .notes
+                .into_iter()
+                .map(|note| (sample.stem.clone(), note)),
+        );
     }
     let of = |f: &dyn Fn(&ImageScore) -> Option<f64>| {
         Summary::of(
@@ -185,6 +195,7 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
             .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))
             .collect(),
         per_image,
+        notes,
     })
 }
 
@@ -325,6 +336,9 @@ fn print_evaluation(dir: &Path, e: &Evaluation) {
             s.median,
             s.p95
         );
+    }
+    for (stem, note) in &e.notes {
+        println!("  note: {stem}: {note}");
     }
 }
 

@@ -255,7 +255,7 @@ impl Pipeline {
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
-                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc (straight_edge_radius_px; 0 keeps them)",
+                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc (a straight-edge radius of 0 keeps them)",
                 found.straight_dropped, self.config.straight_edge_radius_px
             ));
         }
