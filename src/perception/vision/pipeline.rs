@@ -629,31 +629,37 @@ mod tests {
     }
 
     #[test]
-    fn cables_bending_through_a_thirty_degree_crossing_keep_to_themselves() {
+    fn cables_bending_through_a_shallow_crossing_keep_to_themselves() {
         // Both bend the same way through the crossing, as cables lying
-        // loose do: the skeleton between the crossing's two junctions runs
-        // between them, far from the sharper one's direction beyond.
-        let steep = curve_through([320.0, 240.0], -0.9, -1.0 / 150.0, 140);
-        let shallow = curve_through([320.0, 240.0], -0.4, -1.0 / 250.0, 200);
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { gray: 220.0 },
-            vec![
-                SyntheticCable {
-                    width_px: 10,
-                    ..cable(steep.clone(), [20.0; 3])
-                },
-                SyntheticCable {
-                    width_px: 10,
-                    ..cable(shallow.clone(), [150.0, 60.0, 40.0])
-                },
-            ],
-            4,
-        )
-        .unwrap();
-        let out = detect(&scene.image, VisionConfig::default());
-        assert_each_followed(&out, &[steep, shallow], 3.0);
+        // loose do. At 29°, radii 150 and 250 px: the skeleton between the
+        // crossing's two junctions runs between the cables, far from the
+        // sharper one's direction beyond. At 29°, radii 110 and 250 px:
+        // the sharper cable's branch points, a width out, more towards the
+        // other cable's far branch than its own, unless followed back
+        // along its curve.
+        for (steep_rad, steep_radius_px) in [(-0.9, 150.0), (-1.0, 110.0)] {
+            let steep = curve_through([320.0, 240.0], steep_rad, -1.0 / steep_radius_px, 140);
+            let shallow = curve_through([320.0, 240.0], steep_rad + 0.5, -1.0 / 250.0, 200);
+            let scene = draw_scene(
+                480,
+                640,
+                Background::Plain { gray: 220.0 },
+                vec![
+                    SyntheticCable {
+                        width_px: 10,
+                        ..cable(steep.clone(), [20.0; 3])
+                    },
+                    SyntheticCable {
+                        width_px: 10,
+                        ..cable(shallow.clone(), [150.0, 60.0, 40.0])
+                    },
+                ],
+                4,
+            )
+            .unwrap();
+            let out = detect(&scene.image, VisionConfig::default());
+            assert_each_followed(&out, &[steep, shallow], 3.0);
+        }
     }
 
     #[test]

@@ -10,7 +10,8 @@
 //! cable widths are merged, because two cables crossing at a shallow angle
 //! thin into two 3-way junctions rather than one 4-way one. At each
 //! (merged) junction the branches are paired so that the total bending is
-//! least: a cable goes straight through a crossing. Walking edges and
+//! least, each branch's direction followed back along its curve into the
+//! junction: a cable goes on through a crossing as it bends. Walking edges and
 //! pairings from end to end gives one pixel path per cable. Last, paths
 //! whose ends face each other across a short gap are joined (a mask broken
 //! at a ferrule or a glint), for the superpixel method's paths too.
@@ -508,15 +509,14 @@ impl Graph {
         pts
     }
 
-    /// The branch's direction leaving the junction, measured past the
-    /// junction's distortion (about one width out) over two widths.
+    /// The branch's direction leaving the junction (see
+    /// [`direction_stretch`]).
     fn branch_direction(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
         let pts = self.outward(branch);
         let Some(last) = pts.len().checked_sub(1) else {
             return [0.0, 0.0];
         };
-        let skip = (0.75 * width_px).round() as usize;
-        let span = (2.0 * width_px).max(8.0).round() as usize;
+        let (skip, span) = direction_stretch(width_px);
         let i0 = skip.min(last);
         let i1 = (skip + span).min(last);
         let (from, to) = if i1 > i0 {
@@ -532,6 +532,37 @@ impl Graph {
             [0.0, 0.0]
         }
     }
+
+    /// The branch's direction at the junction: its direction past the
+    /// junction's distortion, turned on towards the junction by as much as
+    /// it turns over the next two widths, so that a cable bending through a
+    /// crossing is judged by its curve rather than its chord.
+    fn branch_tangent(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
+        let near = self.branch_direction(branch, centre, width_px);
+        let pts = self.outward(branch);
+        let (skip, span) = direction_stretch(width_px);
+        let (i1, i2) = (skip + span, skip + 2 * span);
+        if i2 >= pts.len() {
+            return near;
+        }
+        let far = [pts[i2][0] - pts[i1][0], pts[i2][1] - pts[i1][1]];
+        let near_rad = near[1].atan2(near[0]);
+        let turn_rad = near_rad - far[1].atan2(far[0]);
+        let turn_rad = turn_rad.sin().atan2(turn_rad.cos());
+        // From the middle of the far stretch to the middle of the near one
+        // is one span; from there to the junction, skip + span / 2.
+        let back_rad = near_rad + turn_rad * (skip as f64 + 0.5 * span as f64) / span as f64;
+        [back_rad.cos(), back_rad.sin()]
+    }
+}
+
+/// Where a branch's direction is measured, in pixels along it from its
+/// junction: past the junction's distortion (about one width out), over two
+/// widths.
+fn direction_stretch(width_px: f64) -> (usize, usize) {
+    let skip = (0.75 * width_px).round() as usize;
+    let span = (2.0 * width_px).max(8.0).round() as usize;
+    (skip, span)
 }
 
 /// Bending, in radians, of going in along `a` (pointing out of the
@@ -756,7 +787,7 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
         } else {
             let dirs: Vec<[f64; 2]> = list
                 .iter()
-                .map(|&b| graph.branch_direction(b, centre, width_px))
+                .map(|&b| graph.branch_tangent(b, centre, width_px))
                 .collect();
             let cost: Vec<Vec<f64>> = dirs
                 .iter()
