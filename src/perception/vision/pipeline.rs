@@ -663,6 +663,53 @@ mod tests {
     }
 
     #[test]
+    fn every_crossing_of_forty_degrees_or_more_between_bending_cables_is_resolved() {
+        // 54 crossings: 40°, 52° and 63°; the steeper cable at three
+        // headings and bending at radii of 90 to 150 px, the other bending
+        // the same way at 180 or 250 px (shallower crossings, and cables
+        // bending opposite ways, still fail often).
+        for crossing_rad in [0.7, 0.9, 1.1] {
+            for steep_rad in [-0.9, -1.1, -1.3] {
+                for steep_radius_px in [90.0, 110.0, 150.0] {
+                    for other_radius_px in [180.0, 250.0] {
+                        let steep =
+                            curve_through([320.0, 240.0], steep_rad, -1.0 / steep_radius_px, 140);
+                        let other = curve_through(
+                            [320.0, 240.0],
+                            steep_rad + crossing_rad,
+                            -1.0 / other_radius_px,
+                            200,
+                        );
+                        let scene = draw_scene(
+                            480,
+                            640,
+                            Background::Plain { gray: 220.0 },
+                            vec![
+                                SyntheticCable {
+                                    width_px: 10,
+                                    ..cable(steep.clone(), [20.0; 3])
+                                },
+                                SyntheticCable {
+                                    width_px: 10,
+                                    ..cable(other.clone(), [150.0, 60.0, 40.0])
+                                },
+                            ],
+                            4,
+                        )
+                        .unwrap();
+                        let out = detect(&scene.image, VisionConfig::default());
+                        let ends: Vec<_> = out.cables.iter().map(|c| c.spline.point(0.0)).collect();
+                        eprintln!(
+                            "crossing {crossing_rad} rad, steep {steep_rad} rad at {steep_radius_px} px, other at {other_radius_px} px: ends {ends:.0?}"
+                        );
+                        assert_each_followed(&out, &[steep, other], 3.0);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn no_cable_is_an_empty_result() {
         for kind in [
             Background::Plain { gray: 128.0 },
