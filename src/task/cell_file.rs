@@ -11,7 +11,9 @@ use serde::{Deserialize, Deserializer};
 
 use crate::hw::arm::WorkspaceBox;
 use crate::perception::tactile::TAXEL_COUNT;
-use crate::perception::vision::network::{DEFAULT_INPUT_SCALE, input_scale_is_valid};
+use crate::perception::vision::network::{
+    DEFAULT_INPUT_SCALE, MAX_INPUT_SCALE, input_scale_is_valid,
+};
 use crate::sim::emulator::{Fault, pg70, tactile};
 
 use super::validate::{
@@ -532,7 +534,7 @@ fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error
         Ok(scale)
     } else {
         Err(D::Error::custom(format!(
-            "net_scale {scale} is outside (0, 2]"
+            "net_scale {scale} is outside (0, {MAX_INPUT_SCALE}]"
         )))
     }
 }

@@ -218,7 +218,10 @@ impl SegmentationNet {
         }
         if !input_scale_is_valid(self.input_scale) {
             return Err(NetworkError::Image {
-                reason: format!("input scale {} is outside (0, 2]", self.input_scale),
+                reason: format!(
+                    "input scale {} is outside (0, {MAX_INPUT_SCALE}]",
+                    self.input_scale
+                ),
             });
         }
         let (w, h) = network_size(bgr.cols(), bgr.rows(), self.input_scale);

@@ -628,6 +628,48 @@ mod tests {
         back
     }
 
+    /// Two 10 px cables crossing at the image's centre, both bending the
+    /// same way: one heading `steep_rad` there and bending at
+    /// `steep_radius_px`, the other `crossing_rad` from it and bending at
+    /// `other_radius_px`. Each must be followed through the crossing.
+    fn assert_bending_crossing_resolved(
+        steep_rad: f64,
+        steep_radius_px: f64,
+        crossing_rad: f64,
+        other_radius_px: f64,
+    ) {
+        let centre = [320.0, 240.0];
+        let steep = curve_through(centre, steep_rad, -1.0 / steep_radius_px, 140);
+        let other = curve_through(
+            centre,
+            steep_rad + crossing_rad,
+            -1.0 / other_radius_px,
+            200,
+        );
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 220.0 },
+            vec![
+                SyntheticCable {
+                    width_px: 10,
+                    ..cable(steep.clone(), [20.0; 3])
+                },
+                SyntheticCable {
+                    width_px: 10,
+                    ..cable(other.clone(), [150.0, 60.0, 40.0])
+                },
+            ],
+            4,
+        )
+        .unwrap();
+        let out = detect(&scene.image, VisionConfig::default());
+        eprintln!(
+            "crossing {crossing_rad} rad, steep {steep_rad} rad at {steep_radius_px} px, other at {other_radius_px} px"
+        );
+        assert_each_followed(&out, &[steep, other], 3.0);
+    }
+
     #[test]
     fn cables_bending_through_a_shallow_crossing_keep_to_themselves() {
         // Both bend the same way through the crossing, as cables lying
@@ -637,29 +679,8 @@ mod tests {
         // the sharper cable's branch points, a width out, more towards the
         // other cable's far branch than its own, unless followed back
         // along its curve.
-        for (steep_rad, steep_radius_px) in [(-0.9, 150.0), (-1.0, 110.0)] {
-            let steep = curve_through([320.0, 240.0], steep_rad, -1.0 / steep_radius_px, 140);
-            let shallow = curve_through([320.0, 240.0], steep_rad + 0.5, -1.0 / 250.0, 200);
-            let scene = draw_scene(
-                480,
-                640,
-                Background::Plain { gray: 220.0 },
-                vec![
-                    SyntheticCable {
-                        width_px: 10,
-                        ..cable(steep.clone(), [20.0; 3])
-                    },
-                    SyntheticCable {
-                        width_px: 10,
-                        ..cable(shallow.clone(), [150.0, 60.0, 40.0])
-                    },
-                ],
-                4,
-            )
-            .unwrap();
-            let out = detect(&scene.image, VisionConfig::default());
-            assert_each_followed(&out, &[steep, shallow], 3.0);
-        }
+        assert_bending_crossing_resolved(-0.9, 150.0, 0.5, 250.0);
+        assert_bending_crossing_resolved(-1.0, 110.0, 0.5, 250.0);
     }
 
     #[test]
@@ -672,37 +693,12 @@ mod tests {
             for steep_rad in [-0.9, -1.1, -1.3] {
                 for steep_radius_px in [90.0, 110.0, 150.0] {
                     for other_radius_px in [180.0, 250.0] {
-                        let steep =
-                            curve_through([320.0, 240.0], steep_rad, -1.0 / steep_radius_px, 140);
-                        let other = curve_through(
-                            [320.0, 240.0],
-                            steep_rad + crossing_rad,
-                            -1.0 / other_radius_px,
-                            200,
+                        assert_bending_crossing_resolved(
+                            steep_rad,
+                            steep_radius_px,
+                            crossing_rad,
+                            other_radius_px,
                         );
-                        let scene = draw_scene(
-                            480,
-                            640,
-                            Background::Plain { gray: 220.0 },
-                            vec![
-                                SyntheticCable {
-                                    width_px: 10,
-                                    ..cable(steep.clone(), [20.0; 3])
-                                },
-                                SyntheticCable {
-                                    width_px: 10,
-                                    ..cable(other.clone(), [150.0, 60.0, 40.0])
-                                },
-                            ],
-                            4,
-                        )
-                        .unwrap();
-                        let out = detect(&scene.image, VisionConfig::default());
-                        let ends: Vec<_> = out.cables.iter().map(|c| c.spline.point(0.0)).collect();
-                        eprintln!(
-                            "crossing {crossing_rad} rad, steep {steep_rad} rad at {steep_radius_px} px, other at {other_radius_px} px: ends {ends:.0?}"
-                        );
-                        assert_each_followed(&out, &[steep, other], 3.0);
                     }
                 }
             }

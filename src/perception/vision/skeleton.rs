@@ -512,25 +512,7 @@ impl Graph {
     /// The branch's direction leaving the junction (see
     /// [`direction_stretch`]).
     fn branch_direction(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
-        let pts = self.outward(branch);
-        let Some(last) = pts.len().checked_sub(1) else {
-            return [0.0, 0.0];
-        };
-        let (skip, span) = direction_stretch(width_px);
-        let i0 = skip.min(last);
-        let i1 = (skip + span).min(last);
-        let (from, to) = if i1 > i0 {
-            (pts[i0], pts[i1])
-        } else {
-            (centre, pts[last])
-        };
-        let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
-        let norm = dx.hypot(dy);
-        if norm > 0.0 {
-            [dx / norm, dy / norm]
-        } else {
-            [0.0, 0.0]
-        }
+        direction_leaving(&self.outward(branch), centre, width_px)
     }
 
     /// The branch's direction at the junction: its direction past the
@@ -538,8 +520,8 @@ impl Graph {
     /// it turns over the next two widths, so that a cable bending through a
     /// crossing is judged by its curve rather than its chord.
     fn branch_tangent(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
-        let near = self.branch_direction(branch, centre, width_px);
         let pts = self.outward(branch);
+        let near = direction_leaving(&pts, centre, width_px);
         let (skip, span) = direction_stretch(width_px);
         let (i1, i2) = (skip + span, skip + 2 * span);
         if i2 >= pts.len() {
@@ -553,6 +535,30 @@ impl Graph {
         // is one span; from there to the junction, skip + span / 2.
         let back_rad = near_rad + turn_rad * (skip as f64 + 0.5 * span as f64) / span as f64;
         [back_rad.cos(), back_rad.sin()]
+    }
+}
+
+/// The direction of a branch's pixels `pts` (going out of a junction at
+/// `centre`) over the stretch of [`direction_stretch`], or from the centre
+/// to its last pixel when it is shorter.
+fn direction_leaving(pts: &[[f64; 2]], centre: [f64; 2], width_px: f64) -> [f64; 2] {
+    let Some(last) = pts.len().checked_sub(1) else {
+        return [0.0, 0.0];
+    };
+    let (skip, span) = direction_stretch(width_px);
+    let i0 = skip.min(last);
+    let i1 = (skip + span).min(last);
+    let (from, to) = if i1 > i0 {
+        (pts[i0], pts[i1])
+    } else {
+        (centre, pts[last])
+    };
+    let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
+    let norm = dx.hypot(dy);
+    if norm > 0.0 {
+        [dx / norm, dy / norm]
+    } else {
+        [0.0, 0.0]
     }
 }
 

@@ -134,27 +134,23 @@ fn graph(image: &Mat, mask: &Mat, region_px: i32) -> Result<Nodes, VisionError> 
     // other side of a cable) would be nodes off the centre line that a walk
     // zigzags through: they are no nodes, but still join their neighbours.
     let min_node_px = f64::from(region_px * region_px) / 8.0;
-    let is_node: Vec<bool> = sums.iter().map(|s| s[2] >= min_node_px).collect();
-    let mut node_of_piece = vec![usize::MAX; sums.len()];
+    let mut node_of_piece: Vec<Option<usize>> = vec![None; sums.len()];
     let mut centres_px: Vec<[f64; 2]> = Vec::new();
     for (piece, s) in sums.iter().enumerate() {
-        if is_node[piece] {
-            node_of_piece[piece] = centres_px.len();
+        if s[2] >= min_node_px {
+            node_of_piece[piece] = Some(centres_px.len());
             centres_px.push([s[0] / s[2], s[1] / s[2]]);
         }
     }
     let mut neighbours = vec![Vec::new(); centres_px.len()];
     for (piece, next) in pieces_next_to.iter().enumerate() {
-        let linked: Vec<usize> = next
-            .iter()
-            .filter(|&&p| is_node[p])
-            .map(|&p| node_of_piece[p])
-            .collect();
-        if is_node[piece] {
-            neighbours[node_of_piece[piece]].extend(linked);
-        } else {
-            for &a in &linked {
-                neighbours[a].extend(linked.iter().copied().filter(|&b| b != a));
+        let linked: Vec<usize> = next.iter().filter_map(|&p| node_of_piece[p]).collect();
+        match node_of_piece[piece] {
+            Some(node) => neighbours[node].extend(linked),
+            None => {
+                for &a in &linked {
+                    neighbours[a].extend(linked.iter().copied().filter(|&b| b != a));
+                }
             }
         }
     }
