@@ -852,6 +852,46 @@ mod tests {
     }
 
     #[test]
+    fn a_band_along_the_border_is_not_taken_for_cable() {
+        // Two cables converge on the right border and reach it about 50 px
+        // apart; a dark band along the border (a shadow at the frame's
+        // edge) continues one into the other. Each cable ends where it
+        // leaves the view, without a hook along the band.
+        let upper = curve_through([560.0, 150.0], 0.7, -1.0 / 1000.0, 150);
+        let lower = curve_through([560.0, 310.0], -0.7, 1.0 / 1000.0, 150);
+        let in_view = |curve: &[[f64; 2]]| -> Vec<[f64; 2]> {
+            curve.iter().copied().take_while(|p| p[0] < 637.0).collect()
+        };
+        let (upper, lower) = (in_view(&upper), in_view(&lower));
+        let (upper_end, lower_end) = (*upper.last().unwrap(), *lower.last().unwrap());
+        assert!((30.0..60.0).contains(&(lower_end[1] - upper_end[1])));
+        let mut joined = upper.clone();
+        joined.extend(segment_px([637.0, upper_end[1]], [637.0, lower_end[1]]));
+        joined.extend(lower.iter().rev());
+        // Corners rounded, as the mask's are: a moving average over 21 px.
+        let rounded: Vec<[f64; 2]> = (0..joined.len())
+            .map(|i| {
+                let near = &joined[i.saturating_sub(10)..(i + 11).min(joined.len())];
+                let n = near.len() as f64;
+                [
+                    near.iter().map(|p| p[0]).sum::<f64>() / n,
+                    near.iter().map(|p| p[1]).sum::<f64>() / n,
+                ]
+            })
+            .collect();
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 210.0 },
+            vec![cable(rounded, [30.0; 3])],
+            6,
+        )
+        .unwrap();
+        let out = detect(&scene.image, VisionConfig::default());
+        assert_each_followed(&out, &[upper, lower], 3.0);
+    }
+
+    #[test]
     fn a_straight_detection_is_dropped_as_an_edge_unless_asked_to_keep_it() {
         use std::f64::consts::FRAC_PI_2;
         // A ruler-straight 300 px line; a 110 px piece of cable bent like a

@@ -63,6 +63,21 @@ const JOIN_MAX_BEND_RAD: f64 = 0.45;
 /// last pixels, short enough to follow a bend.
 const JOIN_TANGENT_WIDTHS: f64 = 2.0;
 const JOIN_TANGENT_MIN_PX: f64 = 8.0;
+/// Skeleton pixels this close to the mask's border, in cable widths (plus
+/// [`BORDER_CUT_EXTRA_PX`]), may follow the border rather than a cable:
+/// where two cables leave the view side by side, the network's mask often
+/// joins them with a band along the border, whose skeleton runs 2–3 px in.
+/// A cable half out of view keeps its skeleton further in.
+const BORDER_CUT_WIDTHS: f64 = 0.25;
+const BORDER_CUT_EXTRA_PX: f64 = 2.0;
+/// A path that runs along the border and turns by more than this there
+/// (its direction over [`JOIN_TANGENT_WIDTHS`] before and after) is two
+/// cables: the annotated wires of cables-dev turn by at most 45° over 16 px
+/// either side of any point.
+const BORDER_CUT_TURN_RAD: f64 = std::f64::consts::FRAC_PI_2;
+/// A path's end that runs along the border and turns from the path by more
+/// than this is a hook of the thinning, not cable.
+const BORDER_HOOK_TURN_RAD: f64 = std::f64::consts::FRAC_PI_4;
 /// Above this many branches at one junction the exact least-bending pairing
 /// is too costly and pairs are taken greedily, straightest first.
 const MAX_EXACT_BRANCHES: usize = 8;
@@ -660,13 +675,19 @@ fn end_direction(points: &[[f64; 2]], span_px: f64) -> Option<[f64; 2]> {
     (norm > 1.0).then(|| [dx / norm, dy / norm])
 }
 
+/// How much of a path, for cables `width_px` wide, gives an end's direction
+/// (see [`JOIN_TANGENT_WIDTHS`]).
+fn tangent_span_px(width_px: f64) -> f64 {
+    (JOIN_TANGENT_WIDTHS * width_px).max(JOIN_TANGENT_MIN_PX)
+}
+
 /// Joins paths that continue each other across a short gap (see
 /// [`JOIN_GAP_WIDTHS`]), best-aligned pair first, until no pair does.
 /// Each path's ends are looked at in both directions, so the result may
 /// run either way.
 pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<Vec<[f64; 2]>> {
     let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
-    let span_px = (JOIN_TANGENT_WIDTHS * width_px).max(JOIN_TANGENT_MIN_PX);
+    let span_px = tangent_span_px(width_px);
     loop {
         // Every path's two ends: (path, reversed?, end point, outward direction).
         let mut ends = Vec::new();
@@ -718,15 +739,99 @@ pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<V
     }
 }
 
-/// The cables from pixel paths, whichever method found them: pieces that
-/// continue each other joined, each run from its end with the smaller
+/// `path` cut where it runs within `margin_px` of the border of a mask of
+/// `size_px` (columns, rows) and turns there (see [`BORDER_CUT_TURN_RAD`]):
+/// two cables that leave the view side by side, joined by the mask along
+/// the border, come apart; an end that hooks along the border is trimmed
+/// off. A cable that grazes the border, or leaves it at a slant, turns
+/// less and stays whole. A path that lies along the border all the way is
+/// dropped: it is the band, or a cable all but out of view.
+fn cut_at_border(
+    path: Vec<[f64; 2]>,
+    size_px: [f64; 2],
+    margin_px: f64,
+    span_px: f64,
+) -> Vec<Vec<[f64; 2]>> {
+    let near = |p: &[f64; 2]| {
+        p[0] < margin_px
+            || p[1] < margin_px
+            || p[0] > size_px[0] - 1.0 - margin_px
+            || p[1] > size_px[1] - 1.0 - margin_px
+    };
+    let (Some(first), Some(last)) = (
+        path.iter().position(|p| !near(p)),
+        path.iter().rposition(|p| !near(p)),
+    ) else {
+        return Vec::new();
+    };
+    // How far the path turns from `before` (ending where a run along the
+    // border starts) to `after` (starting where it ends).
+    let turn_rad = |before: &[[f64; 2]], after: &[[f64; 2]]| {
+        let mut onward = after.to_vec();
+        onward.reverse();
+        match (
+            end_direction(before, span_px),
+            end_direction(&onward, span_px),
+        ) {
+            (Some(into), Some(back)) => angle_rad(into, [-back[0], -back[1]]),
+            _ => 0.0,
+        }
+    };
+    let keep_start = turn_rad(&path[..=first], &path[first..]) <= BORDER_HOOK_TURN_RAD;
+    let keep_end = turn_rad(&path[..=last], &path[last + 1..]) <= BORDER_HOOK_TURN_RAD;
+
+    let mut pieces = vec![if keep_start {
+        path[..=first].to_vec()
+    } else {
+        vec![path[first]]
+    }];
+    let mut i = first + 1;
+    while i <= last {
+        if !near(&path[i]) {
+            pieces.last_mut().expect("never empty").push(path[i]);
+            i += 1;
+            continue;
+        }
+        let end = i + path[i..]
+            .iter()
+            .position(|p| !near(p))
+            .expect("last is not near");
+        if turn_rad(&path[first..i], &path[end..=last]) > BORDER_CUT_TURN_RAD {
+            pieces.push(Vec::new());
+        } else {
+            pieces
+                .last_mut()
+                .expect("never empty")
+                .extend_from_slice(&path[i..end]);
+        }
+        i = end;
+    }
+    if keep_end {
+        pieces
+            .last_mut()
+            .expect("never empty")
+            .extend_from_slice(&path[last + 1..]);
+    }
+    pieces
+}
+
+/// The cables from pixel paths, whichever method found them: paths cut
+/// where they run along the mask's border (see [`BORDER_CUT_WIDTHS`]),
+/// pieces that continue each other joined, each run from its end with the smaller
 /// (x, y) and kept if at least `min_length_px` long, sorted by their first
 /// point.
 pub(super) fn finish_paths(
     paths: Vec<Vec<[f64; 2]>>,
+    size_px: [f64; 2],
     width_px: f64,
     min_length_px: f64,
 ) -> Vec<CablePath> {
+    let margin_px = BORDER_CUT_WIDTHS * width_px + BORDER_CUT_EXTRA_PX;
+    let span_px = tangent_span_px(width_px);
+    let paths = paths
+        .into_iter()
+        .flat_map(|path| cut_at_border(path, size_px, margin_px, span_px))
+        .collect();
     let paths = join_continuations(paths, width_px);
 
     let mut out: Vec<CablePath> = paths
@@ -872,7 +977,12 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
         paths.push(lp.iter().map(|&i| graph.grid.xy(i)).collect());
     }
     Ok(FoundPaths {
-        paths: finish_paths(paths, width_px, min_length_px),
+        paths: finish_paths(
+            paths,
+            [f64::from(mask.cols()), f64::from(mask.rows())],
+            width_px,
+            min_length_px,
+        ),
         width_px,
     })
 }
@@ -930,5 +1040,64 @@ mod tests {
             line([105.0, 112.0], [200.0, 112.0]),
         ];
         assert_eq!(join_continuations(parallel, 8.0).len(), 2);
+    }
+
+    /// A 640 × 480 mask's border cut at 6 px, directions over 16 px.
+    fn cut(path: Vec<[f64; 2]>) -> Vec<Vec<[f64; 2]>> {
+        cut_at_border(path, [640.0, 480.0], 6.0, 16.0)
+    }
+
+    #[test]
+    fn two_cables_joined_along_the_border_are_cut_apart() {
+        // Into the right border, 30 px along it, and back out.
+        let mut path = line([500.0, 100.0], [637.0, 200.0]);
+        path.extend(line([637.0, 201.0], [637.0, 230.0]));
+        path.extend(line([637.0, 231.0], [500.0, 330.0]));
+        let pieces = cut(path);
+        assert_eq!(pieces.len(), 2);
+        for piece in &pieces {
+            assert!(piece.iter().all(|p| p[0] < 634.0));
+            assert!(polyline_length(piece) > 150.0);
+        }
+    }
+
+    #[test]
+    fn a_hook_along_the_border_is_trimmed_off_a_cable_end() {
+        let mut path = line([300.0, 100.0], [637.0, 100.0]);
+        path.extend(line([637.0, 101.0], [637.0, 130.0]));
+        let pieces = cut(path.clone());
+        assert_eq!(pieces.len(), 1);
+        let end = *pieces[0].last().unwrap();
+        assert!(end[0] < 634.0 && (end[1] - 100.0).abs() < 0.5, "{end:?}");
+        // The same, walked from the hook.
+        path.reverse();
+        let mut pieces = cut(path);
+        assert_eq!(pieces.len(), 1);
+        pieces[0].reverse();
+        assert_eq!(*pieces[0].last().unwrap(), end);
+    }
+
+    #[test]
+    fn a_cable_leaving_at_a_slant_keeps_its_ends() {
+        // The last 40 px lie within 6 px of the top border, the first 45 px
+        // within 6 px of the left.
+        let mut path = line([1.0, 300.0], [40.0, 200.0]);
+        path.extend(line([41.0, 199.0], [400.0, 1.0]));
+        assert_eq!(cut(path.clone()), vec![path]);
+    }
+
+    #[test]
+    fn a_cable_grazing_the_border_stays_whole() {
+        // A 146 px arc whose leftmost point lies 4 px from the border.
+        let path: Vec<[f64; 2]> = (0..=260)
+            .map(|i| {
+                let a = 2.5 + 1.3 * f64::from(i) / 260.0;
+                [150.0 + 146.0 * a.cos(), 240.0 + 146.0 * a.sin()]
+            })
+            .collect();
+        let pieces = cut(path.clone());
+        assert_eq!(pieces, vec![path]);
+        // Lying along the border all the way, it is dropped.
+        assert!(cut(line([3.0, 100.0], [3.0, 300.0])).is_empty());
     }
 }

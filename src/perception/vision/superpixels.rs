@@ -280,7 +280,12 @@ pub fn paths_from_mask(
         );
     }
     Ok(FoundPaths {
-        paths: finish_paths(paths, width_px, min_length_px),
+        paths: finish_paths(
+            paths,
+            [f64::from(mask.cols()), f64::from(mask.rows())],
+            width_px,
+            min_length_px,
+        ),
         width_px,
     })
 }
