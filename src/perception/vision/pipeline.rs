@@ -853,12 +853,12 @@ mod tests {
 
     #[test]
     fn a_band_along_the_border_is_not_taken_for_cable() {
-        // Two cables converge on the right border and reach it about 50 px
-        // apart; a dark band along the border (a shadow at the frame's
-        // edge) continues one into the other. Each cable ends where it
-        // leaves the view, without a hook along the band.
-        let upper = curve_through([560.0, 150.0], 0.7, -1.0 / 1000.0, 150);
-        let lower = curve_through([560.0, 310.0], -0.7, 1.0 / 1000.0, 150);
+        // Two cables converge on the right border at about 20° and reach
+        // it about 50 px apart; a dark band along the border (a shadow at
+        // the frame's edge) continues one into the other. Each cable ends
+        // where it leaves the view, without a hook along the band.
+        let upper = curve_through([560.0, 170.0], 0.45, -1.0 / 1000.0, 150);
+        let lower = curve_through([560.0, 290.0], -0.45, 1.0 / 1000.0, 150);
         let in_view = |curve: &[[f64; 2]]| -> Vec<[f64; 2]> {
             curve.iter().copied().take_while(|p| p[0] < 637.0).collect()
         };
