@@ -317,17 +317,11 @@ impl Pipeline {
                 self.config.superpixel_widths,
             )?,
         };
-        let rows = f64::from(mask_roi.rows());
-        let cols = f64::from(mask_roi.cols());
+        let size_px = [f64::from(mask_roi.cols()), f64::from(mask_roi.rows())];
         // A skeleton ends about half a width short of where its cable
         // leaves the region.
         let margin_px = found.width_px + 2.0;
-        let at_border = |p: &[f64; 2]| {
-            p[0] < margin_px
-                || p[1] < margin_px
-                || p[0] > cols - 1.0 - margin_px
-                || p[1] > rows - 1.0 - margin_px
-        };
+        let at_border = |p: &[f64; 2]| skeleton::near_border(*p, size_px, margin_px);
         let paths: Vec<_> = found
             .paths
             .iter()

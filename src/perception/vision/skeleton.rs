@@ -739,6 +739,15 @@ pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<V
     }
 }
 
+/// Whether `p` lies within `margin_px` of the border of a mask of `size_px`
+/// (columns, rows).
+pub(super) fn near_border(p: [f64; 2], size_px: [f64; 2], margin_px: f64) -> bool {
+    p[0] < margin_px
+        || p[1] < margin_px
+        || p[0] > size_px[0] - 1.0 - margin_px
+        || p[1] > size_px[1] - 1.0 - margin_px
+}
+
 /// `path` cut where it runs within `margin_px` of the border of a mask of
 /// `size_px` (columns, rows) and turns there (see [`BORDER_CUT_TURN_RAD`]):
 /// two cables that leave the view side by side, joined by the mask along
@@ -752,12 +761,7 @@ fn cut_at_border(
     margin_px: f64,
     span_px: f64,
 ) -> Vec<Vec<[f64; 2]>> {
-    let near = |p: &[f64; 2]| {
-        p[0] < margin_px
-            || p[1] < margin_px
-            || p[0] > size_px[0] - 1.0 - margin_px
-            || p[1] > size_px[1] - 1.0 - margin_px
-    };
+    let near = |p: &[f64; 2]| near_border(*p, size_px, margin_px);
     let (Some(first), Some(last)) = (
         path.iter().position(|p| !near(p)),
         path.iter().rposition(|p| !near(p)),
