@@ -128,18 +128,30 @@ fn superpixel_instances_on_true_masks() {
     );
 }
 
-/// The classical mask on the photographs: reported, not asserted (they are
-/// on wood, cloth and prints, which the classical mask is not for).
+/// The classical mask on the training photographs' white paper and wood
+/// (every third of 00000..00029 keeps the unoptimised test quick). None of
+/// them is plain enough for `auto` to choose it (85 % of the pixels near
+/// the background's colour), yet forced, it still finds the wires:
+/// measured union DICE 0.724 and grasp points 2.9 px from the labelled
+/// centre lines on average. The bounds fail on a broken threshold or
+/// morphology. (On the held-out cloth and prints it does worse, 0.58;
+/// the README's sweep table has the figures.)
+const CLASSICAL_PAPER_MIN_DICE: f64 = 0.69;
+const CLASSICAL_PAPER_MAX_GRASP_PX: f64 = 4.0;
+
 #[test]
-fn classical_mask_is_reported() {
+fn classical_mask_finds_wires_on_white_paper() {
     let Some(dir) = data_dir() else { return };
     let mut pipeline = Pipeline::new(VisionConfig {
         mask: MaskMethod::Classical,
         ..VisionConfig::default()
     });
     let mut scores = Vec::new();
-    // Every third photograph keeps the (unoptimised) test quick.
-    for stem in stems(&dir).into_iter().step_by(3) {
+    for stem in stems(&dir)
+        .into_iter()
+        .filter(|stem| stem.as_str() < "00030")
+        .step_by(3)
+    {
         let path = dir.join(format!("{stem}.jpg"));
         let image = imgcodecs::imread(path.to_str().expect("UTF-8 path"), imgcodecs::IMREAD_COLOR)
             .expect("jpg reads");
@@ -148,11 +160,25 @@ fn classical_mask_is_reported() {
         let out = pipeline
             .detect(&image, None)
             .expect("classical pipeline runs");
-        eprintln!(
-            "{stem}: plain {} {:?}",
-            out.plain_background, out.background
+        assert!(
+            !out.plain_background,
+            "{stem}: judged plain: {:?}",
+            out.background
         );
         scores.push((stem, eval::score(&out, &truth)));
     }
     print_scores("classical", &scores);
+    assert_eq!(scores.len(), 10);
+    let only: Vec<ImageScore> = scores.into_iter().map(|(_, s)| s).collect();
+    let summary = eval::summarize(&only);
+    assert!(
+        summary.union_dice >= CLASSICAL_PAPER_MIN_DICE,
+        "{summary:?}"
+    );
+    assert!(
+        summary
+            .grasp_error_px
+            .is_some_and(|d| d <= CLASSICAL_PAPER_MAX_GRASP_PX),
+        "{summary:?}"
+    );
 }
