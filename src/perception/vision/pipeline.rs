@@ -886,6 +886,33 @@ mod tests {
     }
 
     #[test]
+    fn two_cables_meeting_end_to_end_at_an_angle_are_two() {
+        // One cable ends where the other begins, meeting at about 105°
+        // (00042 of cables-dev: two wires leaving the view side by side,
+        // their masks merged short of the border). The mask is one V.
+        let left = curve_through([240.0, 190.0], 0.7, 1.0 / 400.0, 90);
+        let apex = *left.last().unwrap();
+        let right: Vec<[f64; 2]> = left
+            .iter()
+            .rev()
+            .map(|p| [2.0 * apex[0] - p[0], p[1]])
+            .collect();
+        let scene = draw_scene(
+            480,
+            640,
+            Background::Plain { gray: 210.0 },
+            vec![
+                cable(left.clone(), [30.0; 3]),
+                cable(right.clone(), [30.0; 3]),
+            ],
+            6,
+        )
+        .unwrap();
+        let out = detect(&scene.image, VisionConfig::default());
+        assert_each_followed(&out, &[left, right], 3.0);
+    }
+
+    #[test]
     fn a_straight_detection_is_dropped_as_an_edge_unless_asked_to_keep_it() {
         use std::f64::consts::FRAC_PI_2;
         // A ruler-straight 300 px line; a 110 px piece of cable bent like a

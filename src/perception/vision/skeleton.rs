@@ -78,6 +78,12 @@ const BORDER_CUT_TURN_RAD: f64 = std::f64::consts::FRAC_PI_2;
 /// A path's end that runs along the border and turns from the path by more
 /// than this is a hook of the thinning, not cable.
 const BORDER_HOOK_TURN_RAD: f64 = std::f64::consts::FRAC_PI_4;
+/// A path that turns by more than this over [`JOIN_TANGENT_WIDTHS`] either
+/// side of a point is two cables meeting there (or a hook at its end). In
+/// the 45 photographs of cables-dev, the paths found along single wires
+/// turn by at most 0.73 rad so; where two wires were found as one, by
+/// 1.03 rad or more.
+const CORNER_TURN_RAD: f64 = 0.9;
 /// Above this many branches at one junction the exact least-bending pairing
 /// is too costly and pairs are taken greedily, straightest first.
 const MAX_EXACT_BRANCHES: usize = 8;
@@ -819,6 +825,52 @@ fn cut_at_border(
     pieces
 }
 
+/// `path` cut at each corner sharper than [`CORNER_TURN_RAD`]: where its
+/// direction over `span_px` before a point and over `span_px` after it
+/// differ by more, two cables meet there (touching end to end, or leaving
+/// the view at one place with the mask joined between them). Points within
+/// `span_px` of an end are not looked at: ends are ragged.
+fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64; 2]>> {
+    let mut along_px = Vec::with_capacity(path.len());
+    let mut total_px = 0.0;
+    for (i, p) in path.iter().enumerate() {
+        if i > 0 {
+            total_px += (p[0] - path[i - 1][0]).hypot(p[1] - path[i - 1][1]);
+        }
+        along_px.push(total_px);
+    }
+    let turn_rad = |i: usize| {
+        let back = along_px.partition_point(|&s| s <= along_px[i] - span_px) - 1;
+        let ahead = along_px.partition_point(|&s| s < along_px[i] + span_px);
+        let (a, b, c) = (path[back], path[i], path[ahead]);
+        angle_rad([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]])
+    };
+    let mut cuts = Vec::new();
+    let mut sharpest: Option<(usize, f64)> = None;
+    for i in 0..path.len() {
+        let inside = along_px[i] >= span_px && total_px - along_px[i] >= span_px;
+        let turn = if inside { turn_rad(i) } else { 0.0 };
+        if turn > CORNER_TURN_RAD {
+            if sharpest.is_none_or(|(_, t)| turn > t) {
+                sharpest = Some((i, turn));
+            }
+        } else if let Some((at, _)) = sharpest.take() {
+            cuts.push(at);
+        }
+    }
+    if cuts.is_empty() {
+        return vec![path];
+    }
+    let mut pieces = Vec::with_capacity(cuts.len() + 1);
+    let mut from = 0;
+    for at in cuts {
+        pieces.push(path[from..=at].to_vec());
+        from = at;
+    }
+    pieces.push(path[from..].to_vec());
+    pieces
+}
+
 /// The cables from pixel paths, whichever method found them: paths cut
 /// where they run along the mask's border (see [`BORDER_CUT_WIDTHS`]),
 /// pieces that continue each other joined, each run from its end with the smaller
@@ -980,6 +1032,13 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     for lp in &graph.loops {
         paths.push(lp.iter().map(|&i| graph.grid.xy(i)).collect());
     }
+    // Superpixel walks have their own limit on turning, and their coarse
+    // node-to-node polylines would read as corners here.
+    let span_px = tangent_span_px(width_px);
+    let paths = paths
+        .into_iter()
+        .flat_map(|path| cut_at_corners(path, span_px))
+        .collect();
     Ok(FoundPaths {
         paths: finish_paths(
             paths,
@@ -1044,6 +1103,40 @@ mod tests {
             line([105.0, 112.0], [200.0, 112.0]),
         ];
         assert_eq!(join_continuations(parallel, 8.0).len(), 2);
+    }
+
+    #[test]
+    fn two_cables_meeting_at_a_corner_are_cut_apart() {
+        // Down to (200, 200), then up: a 90° corner.
+        let mut path = line([100.0, 100.0], [200.0, 200.0]);
+        path.extend(line([201.0, 199.0], [300.0, 100.0]));
+        let pieces = cut_at_corners(path, 16.0);
+        assert_eq!(pieces.len(), 2, "{pieces:?}");
+        assert_eq!(*pieces[0].last().unwrap(), [200.0, 200.0]);
+        assert_eq!(pieces[1][0], [200.0, 200.0]);
+        assert!(pieces.iter().all(|p| polyline_length(p) > 135.0));
+    }
+
+    #[test]
+    fn a_tight_bend_is_no_corner_but_a_hooked_end_is_cut_off() {
+        // A U of 20 px radius: its chords over 16 px either side of a
+        // point meet at 0.8 rad.
+        let u: Vec<[f64; 2]> = (0..=63)
+            .map(|i| {
+                let a = std::f64::consts::PI * f64::from(i) / 63.0;
+                [300.0 + 20.0 * a.cos(), 200.0 + 20.0 * a.sin()]
+            })
+            .collect();
+        assert_eq!(cut_at_corners(u.clone(), 16.0), vec![u]);
+        // A right-angled hook of 12 px at an end (a blunt end's thinning):
+        // cut off with a few pixels of the line, left to the length filter.
+        let mut hooked = line([100.0, 100.0], [300.0, 100.0]);
+        hooked.extend(line([300.0, 101.0], [300.0, 112.0]));
+        let pieces = cut_at_corners(hooked, 16.0);
+        assert_eq!(pieces.len(), 2, "{pieces:?}");
+        assert!(pieces[0].iter().all(|p| p[1] == 100.0));
+        assert!(polyline_length(&pieces[0]) > 184.0);
+        assert!(polyline_length(&pieces[1]) < 28.0);
     }
 
     /// A 640 × 480 mask's border cut at 6 px, directions over 16 px.
