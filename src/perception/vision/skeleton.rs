@@ -847,8 +847,8 @@ fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64; 2]>> {
     };
     let mut cuts = Vec::new();
     let mut sharpest: Option<(usize, f64)> = None;
-    for i in 0..path.len() {
-        let inside = along_px[i] >= span_px && total_px - along_px[i] >= span_px;
+    for (i, &at_px) in along_px.iter().enumerate() {
+        let inside = at_px >= span_px && total_px - at_px >= span_px;
         let turn = if inside { turn_rad(i) } else { 0.0 };
         if turn > CORNER_TURN_RAD {
             if sharpest.is_none_or(|(_, t)| turn > t) {
