@@ -208,12 +208,27 @@ fn walk(nodes: &Nodes, start: usize) -> Vec<usize> {
 
 /// The cables' typical width from the mask's distance transform: across a
 /// strip of width w the distance to the edge runs from about 1 to w/2, so
-/// its mean is about (w/2 + 1)/2.
+/// its mean is about (w/2 + 1)/2. The mask is framed by a pixel of
+/// background first: one that fills its image (a region of interest inside
+/// a cable) has no edge of its own, and its distances would be OpenCV's
+/// stand-in for infinity.
 fn width_px(mask: &Mat) -> Result<f64, VisionError> {
+    let mut framed = Mat::default();
+    core::copy_make_border(
+        mask,
+        &mut framed,
+        1,
+        1,
+        1,
+        1,
+        core::BORDER_CONSTANT,
+        core::Scalar::all(0.0),
+    )
+    .map_err(cv("frame mask"))?;
     let mut distance = Mat::default();
-    imgproc::distance_transform(mask, &mut distance, imgproc::DIST_L2, 3, core::CV_32F)
+    imgproc::distance_transform(&framed, &mut distance, imgproc::DIST_L2, 3, core::CV_32F)
         .map_err(cv("distance transform"))?;
-    let mean = core::mean(&distance, mask).map_err(cv("mean distance"))?;
+    let mean = core::mean(&distance, &framed).map_err(cv("mean distance"))?;
     Ok((4.0 * mean[0] - 2.0).max(1.0))
 }
 
@@ -243,6 +258,11 @@ pub fn paths_from_mask(
         bbox.width + 2 * pad,
         bbox.height + 2 * pad,
     ) & Rect::new(0, 0, mask.cols(), mask.rows());
+    // SLIC needs room for a superpixel (it crashes on strips a few pixels
+    // across), and a cable needs several along it.
+    if crop.width < region_px || crop.height < region_px {
+        return Ok(empty);
+    }
     let image_crop = Mat::roi(image, crop)
         .and_then(|m| m.try_clone())
         .map_err(cv("crop image for superpixels"))?;
