@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use cablecell::perception::vision::mask;
 use cablecell::perception::vision::skeleton;
 use cablecell::perception::vision::spline::{BSpline, control_points_for_length};
-use cablecell::perception::vision::synthetic::demo_scene;
 use cablecell::perception::vision::{GroundTruth, InstanceMethod, Pipeline, VisionConfig};
+use cablecell::sim::render::fixtures::demo_scene;
 use criterion::{Criterion, criterion_group, criterion_main};
 use opencv::imgcodecs;
 use opencv::prelude::*;
@@ -62,7 +62,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
 
 fn vision(c: &mut Criterion) {
     let scene = demo_scene(1).expect("synthetic scene");
-    stages(c, "synthetic", &scene.image, None);
+    stages(c, "synthetic", &scene.bgr, None);
 
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/cables-dev");
     let photo = dir.join("00016.jpg");

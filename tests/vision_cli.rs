@@ -5,12 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use cablecell::perception::vision::synthetic::{
-    Background, SyntheticCable, draw_scene, segment_px,
-};
-use opencv::core::{CV_8U, Mat, Point, Scalar, Vector};
+use cablecell::sim::render::fixtures::{draw_scene, matte_cable, segment_px};
+use cablecell::sim::render::{Background, CableSpec, write_scene_files};
+use opencv::core::Vector;
+use opencv::imgcodecs;
 use opencv::prelude::*;
-use opencv::{imgcodecs, imgproc};
 
 fn cablecell(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cablecell"))
@@ -24,84 +23,28 @@ fn text(path: &Path) -> &str {
     path.to_str().expect("utf-8 path")
 }
 
-fn cable(from: [f64; 2], to: [f64; 2]) -> SyntheticCable {
-    SyntheticCable {
-        centreline_px: segment_px(from, to),
-        bgr: [30.0, 30.0, 30.0],
-        width_px: 7,
-    }
+/// A ruler-straight dark cable 7 px across.
+fn cable(from: [f64; 2], to: [f64; 2]) -> CableSpec {
+    matte_cable(segment_px(from, to), 7.0, [30; 3])
 }
 
-/// Draws `cables` on a plain light background into DIR/STEM.png, with the
+/// Draws `cables` on a plain light background into DIR/STEM.jpg, with the
 /// cables-dev ground truth beside it when `truth` is set.
-fn write_scene(dir: &Path, stem: &str, cables: Vec<SyntheticCable>, truth: bool) -> PathBuf {
-    let scene = draw_scene(480, 640, Background::Plain { gray: 200.0 }, cables, 7).expect("scene");
-    let path = dir.join(format!("{stem}.png"));
-    assert!(imgcodecs::imwrite(text(&path), &scene.image, &Vector::new()).expect("write"));
+fn write_scene(dir: &Path, stem: &str, cables: Vec<CableSpec>, truth: bool) -> PathBuf {
+    let scene = draw_scene(
+        480,
+        640,
+        Background::Plain { bgr: [200; 3] },
+        0.0,
+        cables,
+        7,
+    )
+    .expect("scene");
+    let path = dir.join(format!("{stem}.jpg"));
     if truth {
-        let mut union = Mat::zeros(480, 640, CV_8U)
-            .expect("zeros")
-            .to_mat()
-            .expect("mat");
-        let mut lines = String::new();
-        for (k, cable) in scene.cables.iter().enumerate() {
-            let points: Vector<Point> = cable
-                .centreline_px
-                .iter()
-                .map(|p| Point::new(p[0] as i32, p[1] as i32))
-                .collect();
-            let mut curves = Vector::<Vector<Point>>::new();
-            curves.push(points);
-            let mut mask = Mat::zeros(480, 640, CV_8U)
-                .expect("zeros")
-                .to_mat()
-                .expect("mat");
-            let white = Scalar::all(255.0);
-            imgproc::polylines(
-                &mut mask,
-                &curves,
-                false,
-                white,
-                cable.width_px,
-                imgproc::LINE_8,
-                0,
-            )
-            .expect("draw");
-            imgproc::polylines(
-                &mut union,
-                &curves,
-                false,
-                white,
-                cable.width_px,
-                imgproc::LINE_8,
-                0,
-            )
-            .expect("draw");
-            assert!(
-                imgcodecs::imwrite(
-                    text(&dir.join(format!("{stem}_mask_{k}.png"))),
-                    &mask,
-                    &Vector::new()
-                )
-                .expect("write")
-            );
-            let pairs: Vec<String> = cable
-                .centreline_px
-                .iter()
-                .step_by(10)
-                .map(|p| format!("{} {}", p[0], p[1]))
-                .collect();
-            lines += &format!("{} {}\n", pairs.len(), pairs.join(" "));
-        }
-        assert!(
-            imgcodecs::imwrite(
-                text(&dir.join(format!("{stem}_mask_all.png"))),
-                &union,
-                &Vector::new()
-            )
-            .expect("write")
-        );
-        std::fs::write(dir.join(format!("{stem}.txt")), lines).expect("write polylines");
+        write_scene_files(dir, stem, &scene).expect("write scene");
+    } else {
+        assert!(imgcodecs::imwrite(text(&path), &scene.bgr, &Vector::new()).expect("write"));
     }
     path
 }

@@ -13,7 +13,6 @@ pub mod pipeline;
 pub mod skeleton;
 pub mod spline;
 pub mod superpixels;
-pub mod synthetic;
 
 pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};

@@ -14,6 +14,7 @@
 //! the caller's generator, so a seed fixes the image.
 
 mod background;
+pub mod fixtures;
 mod random;
 mod tube;
 
@@ -732,33 +733,42 @@ pub fn write_dataset(
         rng.set_stream(index as u64);
         let scene = random_scene(&mut rng, options);
         let rendered = render(&scene, &mut rng)?;
-        let stem = format!("{index:05}");
-        write_image(
-            &dir.join(format!("{stem}.jpg")),
-            &rendered.bgr,
-            &[imgcodecs::IMWRITE_JPEG_QUALITY, JPEG_QUALITY],
-        )?;
-        for (k, mask) in rendered.masks.iter().enumerate() {
-            write_image(&dir.join(format!("{stem}_mask_{k}.png")), mask, &[])?;
-        }
-        write_image(
-            &dir.join(format!("{stem}_mask_all.png")),
-            &rendered.union_mask,
-            &[],
-        )?;
-        let mut text = String::new();
-        for centerline in &rendered.centerlines_px {
-            let points = resample(centerline, POLYLINE_SPACING_PX);
-            let _ = write!(text, "{}", points.len());
-            for [x, y] in points {
-                let _ = write!(text, " {} {}", x.round(), y.round());
-            }
-            text.push('\n');
-        }
-        let path = dir.join(format!("{stem}.txt"));
-        std::fs::write(&path, text).map_err(|source| RenderError::Io { path, source })?;
+        write_scene_files(dir, &format!("{index:05}"), &rendered)?;
     }
     Ok(())
+}
+
+/// Writes `rendered` into the existing folder `dir` as image `stem` of a
+/// data set in the cables-dev layout (see [`write_dataset`]).
+pub fn write_scene_files(
+    dir: &Path,
+    stem: &str,
+    rendered: &RenderedScene,
+) -> Result<(), RenderError> {
+    write_image(
+        &dir.join(format!("{stem}.jpg")),
+        &rendered.bgr,
+        &[imgcodecs::IMWRITE_JPEG_QUALITY, JPEG_QUALITY],
+    )?;
+    for (k, mask) in rendered.masks.iter().enumerate() {
+        write_image(&dir.join(format!("{stem}_mask_{k}.png")), mask, &[])?;
+    }
+    write_image(
+        &dir.join(format!("{stem}_mask_all.png")),
+        &rendered.union_mask,
+        &[],
+    )?;
+    let mut text = String::new();
+    for centerline in &rendered.centerlines_px {
+        let points = resample(centerline, POLYLINE_SPACING_PX);
+        let _ = write!(text, "{}", points.len());
+        for [x, y] in points {
+            let _ = write!(text, " {} {}", x.round(), y.round());
+        }
+        text.push('\n');
+    }
+    let path = dir.join(format!("{stem}.txt"));
+    std::fs::write(&path, text).map_err(|source| RenderError::Io { path, source })
 }
 
 fn write_image(path: &Path, image: &Mat, params: &[i32]) -> Result<(), RenderError> {
