@@ -444,11 +444,24 @@ mod tests {
     use crate::sim::render::fixtures::{
         arc_px, demo_scene, draw_scene, matte_cable, midpoint_px, segment_px,
     };
-    use crate::sim::render::{Background, CableSpec};
+    use crate::sim::render::{Background, CableSpec, RenderedScene};
 
     /// A matte cable 8 px across.
     fn cable(centerline_px: Vec<[f64; 2]>, bgr: [u8; 3]) -> CableSpec {
         matte_cable(centerline_px, 8.0, bgr)
+    }
+
+    /// `cables` on a plain light gray 640 × 480 table, without noise.
+    fn on_gray_table(cables: Vec<CableSpec>) -> RenderedScene {
+        draw_scene(
+            480,
+            640,
+            Background::Plain { bgr: [210; 3] },
+            0.0,
+            cables,
+            0,
+        )
+        .unwrap()
     }
 
     /// The defaults, but straight detections kept: most cables here are
@@ -765,15 +778,10 @@ mod tests {
     fn region_of_interest_bounds_the_work_and_maps_back() {
         let inside = segment_px([300.0, 240.0], [560.0, 300.0]);
         let outside = segment_px([20.0, 40.0], [250.0, 60.0]);
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { bgr: [210; 3] },
-            0.0,
-            vec![cable(inside.clone(), [20; 3]), cable(outside, [20; 3])],
-            6,
-        )
-        .unwrap();
+        let scene = on_gray_table(vec![
+            cable(inside.clone(), [20; 3]),
+            cable(outside, [20; 3]),
+        ]);
         let roi = Rect::new(280, 200, 320, 160);
         let out = detect(
             &scene.bgr,
@@ -806,15 +814,10 @@ mod tests {
         // Both 60 px long: one enters from the left border, one lies loose.
         let at_border = segment_px([0.0, 100.0], [60.0, 100.0]);
         let loose = segment_px([300.0, 300.0], [360.0, 300.0]);
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { bgr: [210; 3] },
-            0.0,
-            vec![cable(at_border, [20; 3]), cable(loose.clone(), [20; 3])],
-            8,
-        )
-        .unwrap();
+        let scene = on_gray_table(vec![
+            cable(at_border, [20; 3]),
+            cable(loose.clone(), [20; 3]),
+        ]);
         let keep_all = VisionConfig {
             min_border_cable_length_px: 0.0,
             ..keep_straight()
@@ -861,15 +864,7 @@ mod tests {
                 ]
             })
             .collect();
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { bgr: [210; 3] },
-            0.0,
-            vec![cable(rounded, [30; 3])],
-            6,
-        )
-        .unwrap();
+        let scene = on_gray_table(vec![cable(rounded, [30; 3])]);
         let out = detect(&scene.bgr, VisionConfig::default());
         assert_each_followed(&out, &[upper, lower], 3.0);
     }
@@ -886,15 +881,10 @@ mod tests {
             .rev()
             .map(|p| [2.0 * apex[0] - p[0], p[1]])
             .collect();
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { bgr: [210; 3] },
-            0.0,
-            vec![cable(left.clone(), [30; 3]), cable(right.clone(), [30; 3])],
-            6,
-        )
-        .unwrap();
+        let scene = on_gray_table(vec![
+            cable(left.clone(), [30; 3]),
+            cable(right.clone(), [30; 3]),
+        ]);
         let out = detect(&scene.bgr, VisionConfig::default());
         assert_each_followed(&out, &[left, right], 3.0);
     }
@@ -914,15 +904,7 @@ mod tests {
             -FRAC_PI_2 + 0.07,
         );
         let cables = [edge, short_bent, long_bowed];
-        let scene = draw_scene(
-            480,
-            640,
-            Background::Plain { bgr: [210; 3] },
-            0.0,
-            cables.iter().map(|c| cable(c.clone(), [20; 3])).collect(),
-            8,
-        )
-        .unwrap();
+        let scene = on_gray_table(cables.iter().map(|c| cable(c.clone(), [20; 3])).collect());
         let out = detect(&scene.bgr, VisionConfig::default());
         assert_each_followed(&out, &cables[1..], 2.5);
         assert!(

@@ -1053,27 +1053,14 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Points a pixel apart from `from` to `to`.
-    fn line(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
-        let n = (to[0] - from[0]).hypot(to[1] - from[1]).round() as usize;
-        (0..=n)
-            .map(|i| {
-                let t = i as f64 / n as f64;
-                [
-                    from[0] + t * (to[0] - from[0]),
-                    from[1] + t * (to[1] - from[1]),
-                ]
-            })
-            .collect()
-    }
+    use crate::sim::render::fixtures::segment_px;
 
     #[test]
     fn pieces_of_one_cable_across_a_gap_are_joined_in_order() {
         // Given out of order and one of them backwards, 20 px apart, 8 px wide.
         let pieces = vec![
-            line([200.0, 100.0], [120.0, 100.0]),
-            line([0.0, 100.0], [100.0, 100.0]),
+            segment_px([200.0, 100.0], [120.0, 100.0]),
+            segment_px([0.0, 100.0], [100.0, 100.0]),
         ];
         let joined = join_continuations(pieces, 8.0);
         assert_eq!(joined.len(), 1);
@@ -1087,20 +1074,20 @@ mod tests {
     #[test]
     fn ends_that_meet_at_an_angle_or_lie_far_apart_stay_separate() {
         let corner = vec![
-            line([0.0, 100.0], [100.0, 100.0]),
-            line([110.0, 110.0], [110.0, 200.0]),
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([110.0, 110.0], [110.0, 200.0]),
         ];
         assert_eq!(join_continuations(corner, 8.0).len(), 2);
         let far = vec![
-            line([0.0, 100.0], [100.0, 100.0]),
-            line([150.0, 100.0], [250.0, 100.0]),
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([150.0, 100.0], [250.0, 100.0]),
         ];
         assert_eq!(join_continuations(far, 8.0).len(), 2);
         // Side by side, parallel: their ends are close, but one does not
         // lead into the other.
         let parallel = vec![
-            line([0.0, 100.0], [100.0, 100.0]),
-            line([105.0, 112.0], [200.0, 112.0]),
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([105.0, 112.0], [200.0, 112.0]),
         ];
         assert_eq!(join_continuations(parallel, 8.0).len(), 2);
     }
@@ -1108,8 +1095,8 @@ mod tests {
     #[test]
     fn two_cables_meeting_at_a_corner_are_cut_apart() {
         // Down to (200, 200), then up: a 90° corner.
-        let mut path = line([100.0, 100.0], [200.0, 200.0]);
-        path.extend(line([201.0, 199.0], [300.0, 100.0]));
+        let mut path = segment_px([100.0, 100.0], [200.0, 200.0]);
+        path.extend(segment_px([201.0, 199.0], [300.0, 100.0]));
         let pieces = cut_at_corners(path, 16.0);
         assert_eq!(pieces.len(), 2, "{pieces:?}");
         assert_eq!(*pieces[0].last().unwrap(), [200.0, 200.0]);
@@ -1130,8 +1117,8 @@ mod tests {
         assert_eq!(cut_at_corners(u.clone(), 16.0), vec![u]);
         // A right-angled hook of 12 px at an end (a blunt end's thinning):
         // cut off with a few pixels of the line, left to the length filter.
-        let mut hooked = line([100.0, 100.0], [300.0, 100.0]);
-        hooked.extend(line([300.0, 101.0], [300.0, 112.0]));
+        let mut hooked = segment_px([100.0, 100.0], [300.0, 100.0]);
+        hooked.extend(segment_px([300.0, 101.0], [300.0, 112.0]));
         let pieces = cut_at_corners(hooked, 16.0);
         assert_eq!(pieces.len(), 2, "{pieces:?}");
         assert!(pieces[0].iter().all(|p| p[1] == 100.0));
@@ -1147,9 +1134,9 @@ mod tests {
     #[test]
     fn two_cables_joined_along_the_border_are_cut_apart() {
         // Into the right border, 30 px along it, and back out.
-        let mut path = line([500.0, 100.0], [637.0, 200.0]);
-        path.extend(line([637.0, 201.0], [637.0, 230.0]));
-        path.extend(line([637.0, 231.0], [500.0, 330.0]));
+        let mut path = segment_px([500.0, 100.0], [637.0, 200.0]);
+        path.extend(segment_px([637.0, 201.0], [637.0, 230.0]));
+        path.extend(segment_px([637.0, 231.0], [500.0, 330.0]));
         let pieces = cut(path);
         assert_eq!(pieces.len(), 2);
         for piece in &pieces {
@@ -1160,8 +1147,8 @@ mod tests {
 
     #[test]
     fn a_hook_along_the_border_is_trimmed_off_a_cable_end() {
-        let mut path = line([300.0, 100.0], [637.0, 100.0]);
-        path.extend(line([637.0, 101.0], [637.0, 130.0]));
+        let mut path = segment_px([300.0, 100.0], [637.0, 100.0]);
+        path.extend(segment_px([637.0, 101.0], [637.0, 130.0]));
         let pieces = cut(path.clone());
         assert_eq!(pieces.len(), 1);
         let end = *pieces[0].last().unwrap();
@@ -1178,8 +1165,8 @@ mod tests {
     fn a_cable_leaving_at_a_slant_keeps_its_ends() {
         // The last 40 px lie within 6 px of the top border, the first 45 px
         // within 6 px of the left.
-        let mut path = line([1.0, 300.0], [40.0, 200.0]);
-        path.extend(line([41.0, 199.0], [400.0, 1.0]));
+        let mut path = segment_px([1.0, 300.0], [40.0, 200.0]);
+        path.extend(segment_px([41.0, 199.0], [400.0, 1.0]));
         assert_eq!(cut(path.clone()), vec![path]);
     }
 
@@ -1195,6 +1182,6 @@ mod tests {
         let pieces = cut(path.clone());
         assert_eq!(pieces, vec![path]);
         // Lying along the border all the way, it is dropped.
-        assert!(cut(line([3.0, 100.0], [3.0, 300.0])).is_empty());
+        assert!(cut(segment_px([3.0, 100.0], [3.0, 300.0])).is_empty());
     }
 }
