@@ -871,17 +871,18 @@ fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64; 2]>> {
     pieces
 }
 
-/// The cables from pixel paths, whichever method found them: paths cut
-/// where they run along the mask's border (see [`BORDER_CUT_WIDTHS`]),
-/// pieces that continue each other joined, each run from its end with the smaller
-/// (x, y) and kept if at least `min_length_px` long, sorted by their first
-/// point.
+/// The cables from pixel paths in `mask`, whichever method found them:
+/// paths cut where they run along the mask's border (see
+/// [`BORDER_CUT_WIDTHS`]), pieces that continue each other joined, each run
+/// from its end with the smaller (x, y) and kept if at least
+/// `min_length_px` long, sorted by their first point.
 pub(super) fn finish_paths(
     paths: Vec<Vec<[f64; 2]>>,
-    size_px: [f64; 2],
+    mask: &Mat,
     width_px: f64,
     min_length_px: f64,
-) -> Vec<CablePath> {
+) -> FoundPaths {
+    let size_px = [f64::from(mask.cols()), f64::from(mask.rows())];
     let margin_px = BORDER_CUT_WIDTHS * width_px + BORDER_CUT_EXTRA_PX;
     let span_px = tangent_span_px(width_px);
     let paths = paths
@@ -910,7 +911,10 @@ pub(super) fn finish_paths(
             .partial_cmp(&(pb[0], pb[1]))
             .unwrap_or(std::cmp::Ordering::Equal)
     });
-    out
+    FoundPaths {
+        paths: out,
+        width_px,
+    }
 }
 
 /// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
@@ -1039,15 +1043,7 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
         .into_iter()
         .flat_map(|path| cut_at_corners(path, span_px))
         .collect();
-    Ok(FoundPaths {
-        paths: finish_paths(
-            paths,
-            [f64::from(mask.cols()), f64::from(mask.rows())],
-            width_px,
-            min_length_px,
-        ),
-        width_px,
-    })
+    Ok(finish_paths(paths, mask, width_px, min_length_px))
 }
 
 #[cfg(test)]

@@ -299,13 +299,5 @@ pub fn paths_from_mask(
                 .collect(),
         );
     }
-    Ok(FoundPaths {
-        paths: finish_paths(
-            paths,
-            [f64::from(mask.cols()), f64::from(mask.rows())],
-            width_px,
-            min_length_px,
-        ),
-        width_px,
-    })
+    Ok(finish_paths(paths, mask, width_px, min_length_px))
 }
