@@ -3,8 +3,6 @@
 //! against the simulated cable's truth, a real camera's image folder, and
 //! the errors a user meets.
 
-use std::process::{Command, Output};
-
 mod common;
 
 use cablecell::cell::Cell;
@@ -13,19 +11,11 @@ use cablecell::hw::camera::{Camera, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
 use cablecell::task::cell_file::{CameraBackend, CameraSource};
 use cablecell::task::load_cell;
-use common::root;
+use common::{cablecell, root};
 use nalgebra::Vector3;
 use opencv::core::{Mat, Scalar};
 use opencv::imgcodecs;
 use opencv::prelude::*;
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cablecell runs")
-}
 
 /// The text with the `[camera.calibration]` table (its comment, header and
 /// two keys) taken out.

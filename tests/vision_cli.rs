@@ -3,25 +3,16 @@
 //! network is needed).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+mod common;
+
+use common::{cablecell, text};
 
 use cablecell::sim::render::fixtures::{draw_scene, matte_cable, segment_px};
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
 use opencv::core::Vector;
 use opencv::imgcodecs;
 use opencv::prelude::*;
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
-        .output()
-        .expect("cablecell runs")
-}
-
-fn text(path: &Path) -> &str {
-    path.to_str().expect("utf-8 path")
-}
 
 /// A ruler-straight dark cable 7 px across.
 fn cable(from: [f64; 2], to: [f64; 2]) -> CableSpec {

@@ -3,23 +3,15 @@
 //! a seed, and its refusals.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
+
+use common::{cablecell, text};
 
 use opencv::core::{self, Mat};
 use opencv::imgcodecs;
 use opencv::prelude::*;
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")))
-        .output()
-        .expect("cablecell runs")
-}
-
-fn text(path: &Path) -> &str {
-    path.to_str().expect("utf-8 path")
-}
 
 fn read(path: &Path, flags: i32) -> Mat {
     let image = imgcodecs::imread(text(path), flags).expect("imread");

@@ -6,12 +6,27 @@
 #![allow(dead_code)] // each test binary uses its own part
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use cablecell::task::cell_file::{DetectorBackend, OracleConfig};
 use cablecell::task::{CellFile, load_cell};
 
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The binary run with `args` from the project's root, to its end.
+pub fn cablecell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cablecell runs")
+}
+
+/// A path as the `&str` a command line takes.
+pub fn text(path: &Path) -> &str {
+    path.to_str().expect("utf-8 path")
 }
 
 /// The shipped simulated cell's text after `edit`, written into `dir`, its
