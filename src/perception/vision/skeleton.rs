@@ -23,6 +23,7 @@ use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
+use super::spline::arc_lengths_px;
 
 /// Spurs shorter than this many cable widths (plus [`SPUR_EXTRA_PX`]) are
 /// pruned: thinning a blunt end or a ragged edge leaves spurs of about one
@@ -831,14 +832,8 @@ fn cut_at_border(
 /// the view at one place with the mask joined between them). Points within
 /// `span_px` of an end are not looked at: ends are ragged.
 fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64; 2]>> {
-    let mut along_px = Vec::with_capacity(path.len());
-    let mut total_px = 0.0;
-    for (i, p) in path.iter().enumerate() {
-        if i > 0 {
-            total_px += (p[0] - path[i - 1][0]).hypot(p[1] - path[i - 1][1]);
-        }
-        along_px.push(total_px);
-    }
+    let along_px = arc_lengths_px(&path);
+    let total_px = along_px.last().copied().unwrap_or(0.0);
     let turn_rad = |i: usize| {
         let back = along_px.partition_point(|&s| s <= along_px[i] - span_px) - 1;
         let ahead = along_px.partition_point(|&s| s < along_px[i] + span_px);

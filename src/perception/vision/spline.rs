@@ -88,13 +88,8 @@ impl BSpline {
             .copied()
             .filter(|p| p[0].is_finite() && p[1].is_finite())
             .collect();
-        let mut u = Vec::with_capacity(finite.len());
-        let mut acc = 0.0;
-        u.push(0.0);
-        for w in finite.windows(2) {
-            acc += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
-            u.push(acc);
-        }
+        let mut u = arc_lengths_px(&finite);
+        let acc = u.last().copied().unwrap_or(0.0);
         if finite.len() < 2 || acc <= 0.0 {
             return None;
         }
@@ -207,6 +202,19 @@ pub fn chord_sagitta_px(points_px: &[[f64; 2]]) -> f64 {
 /// `sagitta_px` (L²/8h, for arcs much shorter than their circle).
 pub fn arc_radius_px(length_px: f64, sagitta_px: f64) -> f64 {
     length_px * length_px / (8.0 * sagitta_px)
+}
+
+/// The length along `points` up to each of them, from 0 at the first.
+pub(super) fn arc_lengths_px(points: &[[f64; 2]]) -> Vec<f64> {
+    let mut total_px = 0.0;
+    let mut lengths = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        if i > 0 {
+            total_px += (p[0] - points[i - 1][0]).hypot(p[1] - points[i - 1][1]);
+        }
+        lengths.push(total_px);
+    }
+    lengths
 }
 
 #[cfg(test)]
