@@ -121,6 +121,19 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("bogus.png: not an image OpenCV can decode")
     );
+
+    let missing = dir.path().join("missing.png");
+    let out = cablecell(&["detect", text(&missing)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.png: no such image file"));
+
+    let out = cablecell(&["detect", text(dir.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("is a folder, not an image file"),
+        "{stderr}"
+    );
 }
 
 #[test]

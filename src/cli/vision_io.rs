@@ -133,6 +133,9 @@ impl VisionArgs {
 /// Reads a colour image, or says which file could not be read.
 pub fn read_image(path: &Path) -> Result<Mat, String> {
     let name = path.display().to_string();
+    if path.is_dir() {
+        return Err(format!("{name}: is a folder, not an image file"));
+    }
     if !path.is_file() {
         return Err(format!("{name}: no such image file"));
     }
