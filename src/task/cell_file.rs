@@ -564,8 +564,8 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
-    /// Detections straighter than an arc of this radius (px) are dropped
-    /// as edges of paper and tables (default
+    /// Detections straighter than an arc of this radius (px), or within
+    /// 1.5 px of straight, are dropped as edges of paper and tables (default
     /// [`VisionConfig::straight_edge_radius_px`]); 0 keeps them: a cable
     /// held taut between supports is straight.
     #[serde(

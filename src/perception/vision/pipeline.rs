@@ -51,11 +51,11 @@ pub struct VisionConfig {
     /// grasp it, and the middle of what is seen is not the cable's middle.
     pub min_border_cable_length_px: f64,
     /// Paths straighter than an arc of this radius (px), and within 3 px
-    /// of straight, are dropped: the network takes edges of paper, folders
-    /// and tables for cables, and a cable lying loose is never that
-    /// straight (the straightest in cables-dev's training photographs bends
-    /// like a 730 px arc). 0 keeps every path: for a cell whose cable is
-    /// held taut.
+    /// of straight, are dropped, as are paths within 1.5 px of straight
+    /// however short: the network takes edges of paper, folders and tables
+    /// for cables, and a cable lying loose is never that straight (the
+    /// straightest in cables-dev's training photographs bends like a 730 px
+    /// arc). 0 keeps every path: for a cell whose cable is held taut.
     pub straight_edge_radius_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
     /// instances are looked for.
@@ -255,7 +255,7 @@ impl Pipeline {
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
-                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc (a straight-edge radius of 0 keeps them)",
+                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc, or lie within {EDGE_NOISE_SAGITTA_PX} px of straight (a straight-edge radius of 0 keeps them)",
                 found.straight_dropped, self.config.straight_edge_radius_px
             ));
         }
@@ -390,14 +390,21 @@ impl Pipeline {
 /// departs more from its chord is visibly bent, however long.
 const EDGE_MAX_SAGITTA_PX: f64 = 3.0;
 
+/// Within this of straight, a detection's shape cannot tell it from an
+/// edge, however short: mask noise alone bends edges' detections this much
+/// (0.6 to 1.7 px in cables-dev; its wire pieces depart 2.2 px or more).
+const EDGE_NOISE_SAGITTA_PX: f64 = 1.5;
+
 /// Whether a detection (points along it, `length_px` long) is straight
-/// enough to be an edge: it bends less than an arc of `radius_px` (0: never)
-/// and stays within [`EDGE_MAX_SAGITTA_PX`] of its chord.
+/// enough to be an edge (never when `radius_px` is 0): within
+/// [`EDGE_MAX_SAGITTA_PX`] of its chord and bending less than an arc of
+/// `radius_px`, or within [`EDGE_NOISE_SAGITTA_PX`] of its chord.
 fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bool {
     let sagitta_px = spline::chord_sagitta_px(points_px);
     radius_px > 0.0
         && sagitta_px < EDGE_MAX_SAGITTA_PX
-        && spline::arc_radius_px(length_px, sagitta_px) > radius_px
+        && (sagitta_px < EDGE_NOISE_SAGITTA_PX
+            || spline::arc_radius_px(length_px, sagitta_px) > radius_px)
 }
 
 /// The pixels of `mask` within `thickness` of the path.
@@ -915,6 +922,35 @@ mod tests {
         let kept = detect(&scene.bgr, keep_straight());
         assert_each_followed(&kept, &cables, 2.5);
         assert!(kept.notes.is_empty(), "{:?}", kept.notes);
+    }
+
+    #[test]
+    fn an_edge_bends_less_than_the_radius_or_no_more_than_mask_noise() {
+        use std::f64::consts::FRAC_PI_2;
+        // A piece of a circle, `length_px` long, as points.
+        let piece = |length_px: f64, radius_px: f64| {
+            let half_rad = length_px / radius_px / 2.0;
+            let points = arc_px(
+                [0.0, radius_px],
+                radius_px,
+                -FRAC_PI_2 - half_rad,
+                -FRAC_PI_2 + half_rad,
+            );
+            (points, length_px)
+        };
+        let edge = |(points, length_px): (Vec<[f64; 2]>, f64), radius_px| {
+            looks_like_edge(&points, length_px, radius_px)
+        };
+        // 300 px, 2.25 px from straight: a paper edge, unless kept.
+        assert!(edge(piece(300.0, 5000.0), 1500.0));
+        assert!(!edge(piece(300.0, 5000.0), 0.0));
+        // 300 px, 11 px from straight: a cable.
+        assert!(!edge(piece(300.0, 1000.0), 1500.0));
+        // 70 px, 1.2 px from straight (a 500 px arc): too short for its bend
+        // to tell it from an edge's noisy detection.
+        assert!(edge(piece(70.0, 500.0), 1500.0));
+        // 110 px, 2.5 px from straight: a piece of cable.
+        assert!(!edge(piece(110.0, 600.0), 1500.0));
     }
 
     /// Stands in for the segmentation network: the mask of the drawn cables.
