@@ -159,6 +159,42 @@ fn a_missing_network_is_a_clear_error() {
 }
 
 #[test]
+fn eval_vision_names_every_malformed_image_and_where() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for stem in ["00000", "00001", "00002", "00003"] {
+        write_scene(
+            dir.path(),
+            stem,
+            vec![cable([80.0, 120.0], [560.0, 360.0])],
+            true,
+        );
+    }
+    std::fs::write(dir.path().join("00000.txt"), "2 10 10 20 20\n3 1 2 3\n").expect("write");
+    std::fs::write(dir.path().join("00002_mask_0.png"), "not a picture").expect("write");
+    let half_size = Mat::zeros(240, 320, opencv::core::CV_8UC1)
+        .and_then(|m| m.to_mat())
+        .expect("mask");
+    for name in ["00003_mask_0.png", "00003_mask_all.png"] {
+        let path = dir.path().join(name);
+        assert!(imgcodecs::imwrite(text(&path), &half_size, &Vector::new()).expect("write"));
+    }
+    let out = cablecell(&["eval-vision", text(dir.path())]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("00000.txt, line 2: says 3 points but holds 3 coordinates"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("00002_mask_0.png"), "{stderr}");
+    assert!(
+        stderr
+            .contains("00003_mask_0.png is 320x240 px, expected 640x480 px (the size of the image"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("00001"), "{stderr}");
+}
+
+#[test]
 fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     let dir = tempfile::tempdir().expect("tempdir");
     write_scene(

@@ -62,8 +62,10 @@ struct Sample {
 pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     let samples = match load_samples(args) {
         Ok(samples) => samples,
-        Err(message) => {
-            eprintln!("error: {message}");
+        Err(messages) => {
+            for message in messages {
+                eprintln!("error: {message}");
+            }
             return Status::BadInput;
         }
     };
@@ -98,18 +100,24 @@ fn print_json(value: &impl Serialize) -> Status {
     }
 }
 
-/// The selected images of the folder and their truth, or what is wrong.
-fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, String> {
+/// The selected images of the folder and their truth, or what is wrong:
+/// with every image that cannot be read or whose truth is malformed, so
+/// that one run lists all there is to mend.
+fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<String>> {
     let dir = &args.dir;
-    let stems = image_stems(dir)
-        .map_err(|error| format!("{}: cannot list the folder: {error}", dir.display()))?;
+    let stems = image_stems(dir).map_err(|error| {
+        vec![format!(
+            "{}: cannot list the folder: {error}",
+            dir.display()
+        )]
+    })?;
     let selected: Vec<_> = stems
         .into_iter()
         .filter(|(stem, _)| args.from.as_ref().is_none_or(|from| stem >= from))
         .filter(|(stem, _)| args.to.as_ref().is_none_or(|to| stem <= to))
         .collect();
     if selected.is_empty() {
-        return Err(format!(
+        return Err(vec![format!(
             "{}: no NNNNN.jpg images with NNNNN_mask_all.png beside them{}",
             dir.display(),
             match (&args.from, &args.to) {
@@ -120,22 +128,32 @@ fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, String> {
                     to.as_deref().unwrap_or("the last")
                 ),
             }
-        ));
+        )]);
     }
-    selected
-        .into_iter()
-        .map(|(stem, path)| {
-            let image = read_image(&path)?;
-            let truth = GroundTruth::load(dir, &stem)
-                .map_err(|error| format!("{}: {stem}: {error}", dir.display()))?;
-            Ok(Sample {
+    let mut samples = Vec::new();
+    let mut errors = Vec::new();
+    for (stem, path) in selected {
+        let image = read_image(&path);
+        let truth = GroundTruth::load(dir, &stem).and_then(|truth| match &image {
+            Ok(image) => truth.check_fits(image, &path, dir, &stem).map(|()| truth),
+            Err(_) => Ok(truth),
+        });
+        let truth = truth.map_err(|error| format!("{}: {stem}: {error}", dir.display()));
+        match (image, truth) {
+            (Ok(image), Ok(truth)) => samples.push(Sample {
                 stem,
                 path,
                 image,
                 truth,
-            })
-        })
-        .collect()
+            }),
+            (image, truth) => errors.extend(image.err().into_iter().chain(truth.err())),
+        }
+    }
+    if errors.is_empty() {
+        Ok(samples)
+    } else {
+        Err(errors)
+    }
 }
 
 /// Runs the pipeline configured by `vision` on every sample and scores it.

@@ -80,6 +80,21 @@ pub enum VisionError {
         reason: String,
     },
 
+    /// A ground-truth mask's size differs from the entry's other masks or
+    /// from its image: masks are compared pixel by pixel, so all must be
+    /// the image's size.
+    #[error(
+        "ground truth mask {path} is {cols}x{rows} px, expected {expected_cols}x{expected_rows} px ({expected_from})"
+    )]
+    TruthMaskSize {
+        path: PathBuf,
+        cols: i32,
+        rows: i32,
+        expected_cols: i32,
+        expected_rows: i32,
+        expected_from: String,
+    },
+
     /// A ground-truth entry has no per-cable masks (`STEM_mask_0.png`).
     #[error("ground truth for {stem} in {dir}: no per-cable masks ({stem}_mask_0.png)")]
     NoTruthMasks { dir: PathBuf, stem: String },

@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use opencv::core::{self, Mat};
+use opencv::core::{self, Mat, Size};
 use opencv::imgcodecs;
 use opencv::prelude::*;
 
@@ -78,28 +78,60 @@ fn parse_polyline(path: &Path, line_no: usize, line: &str) -> Result<Vec<[f64; 2
     Ok(coords.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
 }
 
+/// Checks that the mask read from `path` is `expected` in size, which
+/// `expected_from` names.
+fn check_mask_size(
+    mask: &Mat,
+    path: &Path,
+    expected: Size,
+    expected_from: impl FnOnce() -> String,
+) -> Result<(), VisionError> {
+    if mask.cols() == expected.width && mask.rows() == expected.height {
+        return Ok(());
+    }
+    Err(VisionError::TruthMaskSize {
+        path: path.to_path_buf(),
+        cols: mask.cols(),
+        rows: mask.rows(),
+        expected_cols: expected.width,
+        expected_rows: expected.height,
+        expected_from: expected_from(),
+    })
+}
+
 impl GroundTruth {
     /// Reads `STEM_mask_K.png` (K = 0, 1, ... while they exist),
     /// `STEM_mask_all.png` (or the masks' union when it is absent) and
-    /// `STEM.txt` from `dir`.
+    /// `STEM.txt` from `dir`. All masks must have the first one's size.
     pub fn load(dir: &Path, stem: &str) -> Result<GroundTruth, VisionError> {
-        let mut masks = Vec::new();
+        let first_path = dir.join(format!("{stem}_mask_0.png"));
+        let mut masks: Vec<Mat> = Vec::new();
         loop {
             let path = dir.join(format!("{stem}_mask_{}.png", masks.len()));
             if !path.exists() {
                 break;
             }
-            masks.push(read_mask(&path)?);
+            let mask = read_mask(&path)?;
+            if let Some(first) = masks.first() {
+                check_mask_size(&mask, &path, size_of(first), || {
+                    format!("the size of {}", first_path.display())
+                })?;
+            }
+            masks.push(mask);
         }
-        if masks.is_empty() {
+        let Some(first) = masks.first() else {
             return Err(VisionError::NoTruthMasks {
                 dir: dir.to_path_buf(),
                 stem: stem.to_string(),
             });
-        }
+        };
         let all_path = dir.join(format!("{stem}_mask_all.png"));
         let union_mask = if all_path.exists() {
-            read_mask(&all_path)?
+            let union = read_mask(&all_path)?;
+            check_mask_size(&union, &all_path, size_of(first), || {
+                format!("the size of {}", first_path.display())
+            })?;
+            union
         } else {
             let mut union = masks[0].try_clone().map_err(cv("copy truth mask"))?;
             for m in &masks[1..] {
@@ -127,6 +159,27 @@ impl GroundTruth {
             polylines_px,
         })
     }
+
+    /// Checks that the masks are `image`'s size (`image_path` names it),
+    /// so that they can be compared with what the pipeline finds in it.
+    pub fn check_fits(
+        &self,
+        image: &Mat,
+        image_path: &Path,
+        dir: &Path,
+        stem: &str,
+    ) -> Result<(), VisionError> {
+        check_mask_size(
+            &self.union_mask,
+            &dir.join(format!("{stem}_mask_0.png")),
+            size_of(image),
+            || format!("the size of the image {}", image_path.display()),
+        )
+    }
+}
+
+fn size_of(m: &Mat) -> Size {
+    Size::new(m.cols(), m.rows())
 }
 
 /// How one image's result compares with its truth.
@@ -316,6 +369,49 @@ mod tests {
             "{err}"
         );
         assert!(parse_polyline(p, 1, "2 a 2 3 4").is_err());
+    }
+
+    #[test]
+    fn masks_of_another_size_are_refused_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, rows: i32, cols: i32| {
+            let mask = Mat::zeros(rows, cols, core::CV_8UC1)
+                .unwrap()
+                .to_mat()
+                .unwrap();
+            let path = dir.path().join(name);
+            imgcodecs::imwrite(path.to_str().unwrap(), &mask, &core::Vector::new()).unwrap();
+        };
+        write("a_mask_0.png", 48, 64);
+        write("a_mask_1.png", 24, 32);
+        std::fs::write(dir.path().join("a.txt"), "1 1 1\n1 2 2\n").unwrap();
+        let err = GroundTruth::load(dir.path(), "a").unwrap_err();
+        assert!(
+            matches!(&err, VisionError::TruthMaskSize { path, cols: 32, rows: 24, .. }
+                if path.ends_with("a_mask_1.png")),
+            "{err}"
+        );
+
+        write("a_mask_1.png", 48, 64);
+        let truth = GroundTruth::load(dir.path(), "a").unwrap();
+        let image = Mat::zeros(96, 128, core::CV_8UC3)
+            .unwrap()
+            .to_mat()
+            .unwrap();
+        let err = truth
+            .check_fits(&image, Path::new("a.jpg"), dir.path(), "a")
+            .unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("is 64x48 px, expected 128x96 px (the size of the image a.jpg)"),
+            "{err}"
+        );
+        let image = Mat::zeros(48, 64, core::CV_8UC3).unwrap().to_mat().unwrap();
+        assert!(
+            truth
+                .check_fits(&image, Path::new("a.jpg"), dir.path(), "a")
+                .is_ok()
+        );
     }
 
     #[test]
