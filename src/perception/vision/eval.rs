@@ -105,6 +105,7 @@ impl GroundTruth {
     /// `STEM.txt` from `dir`. All masks must have the first one's size.
     pub fn load(dir: &Path, stem: &str) -> Result<GroundTruth, VisionError> {
         let first_path = dir.join(format!("{stem}_mask_0.png"));
+        let like_first = || format!("the size of {}", first_path.display());
         let mut masks: Vec<Mat> = Vec::new();
         loop {
             let path = dir.join(format!("{stem}_mask_{}.png", masks.len()));
@@ -113,9 +114,7 @@ impl GroundTruth {
             }
             let mask = read_mask(&path)?;
             if let Some(first) = masks.first() {
-                check_mask_size(&mask, &path, size_of(first), || {
-                    format!("the size of {}", first_path.display())
-                })?;
+                check_mask_size(&mask, &path, size_of(first), like_first)?;
             }
             masks.push(mask);
         }
@@ -128,9 +127,7 @@ impl GroundTruth {
         let all_path = dir.join(format!("{stem}_mask_all.png"));
         let union_mask = if all_path.exists() {
             let union = read_mask(&all_path)?;
-            check_mask_size(&union, &all_path, size_of(first), || {
-                format!("the size of {}", first_path.display())
-            })?;
+            check_mask_size(&union, &all_path, size_of(first), like_first)?;
             union
         } else {
             let mut union = masks[0].try_clone().map_err(cv("copy truth mask"))?;
