@@ -116,24 +116,29 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
 
     let bogus = dir.path().join("bogus.png");
     std::fs::write(&bogus, "not a picture").expect("write");
-    let out = cablecell(&["detect", text(&bogus)]);
-    assert_eq!(out.status.code(), Some(2));
+    let stderr = refused(&["detect", text(&bogus)]);
     assert!(
-        String::from_utf8_lossy(&out.stderr).contains("bogus.png: not an image OpenCV can decode")
+        stderr.contains("bogus.png: not an image OpenCV can decode"),
+        "{stderr}"
     );
-
-    let missing = dir.path().join("missing.png");
-    let out = cablecell(&["detect", text(&missing)]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.png: no such image file"));
-
-    let out = cablecell(&["detect", text(dir.path())]);
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = refused(&["detect", text(&dir.path().join("missing.png"))]);
+    assert!(
+        stderr.contains("missing.png: no such image file"),
+        "{stderr}"
+    );
+    let stderr = refused(&["detect", text(dir.path())]);
     assert!(
         stderr.contains("is a folder, not an image file"),
         "{stderr}"
     );
+}
+
+/// What `cablecell ARGS` wrote to stderr, having refused its input (exit 2).
+fn refused(args: &[&str]) -> String {
+    let out = cablecell(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    stderr
 }
 
 #[test]
@@ -178,9 +183,7 @@ fn eval_vision_names_every_malformed_image_and_where() {
         let path = dir.path().join(name);
         assert!(imgcodecs::imwrite(text(&path), &half_size, &Vector::new()).expect("write"));
     }
-    let out = cablecell(&["eval-vision", text(dir.path())]);
-    assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = refused(&["eval-vision", text(dir.path())]);
     assert!(
         stderr.contains("00000.txt, line 2: says 3 points but holds 3 coordinates"),
         "{stderr}"
