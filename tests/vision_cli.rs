@@ -238,11 +238,21 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
     assert_eq!(e["notes"].as_array().map(Vec::len), Some(0), "{e}");
+    // The rendered masks are the 7 px cables along their centre lines, so
+    // the labels agree with themselves at about that width.
+    let labels = &e["labels_own_union_dice"];
+    let width_px = labels["width_px"].as_f64().expect("width");
+    assert!((6.0..=8.0).contains(&width_px), "{e}");
+    assert!(
+        labels["union_dice"]["mean"].as_f64().expect("dice") > 0.9,
+        "{e}"
+    );
     // By default the drawn cables, ruler-straight, are dropped as edges,
     // and the evaluation says so per image.
     let human = cablecell(&["eval-vision", text(dir.path())]);
     let printed = String::from_utf8_lossy(&human.stdout);
     assert!(printed.contains("instance count right"), "{printed}");
+    assert!(printed.contains("labels' own union DICE"), "{printed}");
     assert!(
         printed.contains("note: 00001: dropped 2 straight detection(s) as edges"),
         "{printed}"

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::MaskNetwork;
-use cablecell::perception::vision::eval::{GroundTruth, ImageScore, score};
+use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
 use clap::Args;
 use opencv::core::Mat;
 use serde::Serialize;
@@ -51,6 +51,21 @@ struct Evaluation {
     notes: Vec<(String, String)>,
 }
 
+/// The labels' own union DICE: their centre lines drawn `width_px` wide
+/// against their masks, a reference for the pipeline's union DICE.
+#[derive(Serialize)]
+struct LabelsOwnDice {
+    width_px: f64,
+    union_dice: Summary,
+}
+
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    evaluation: Evaluation,
+    labels_own_union_dice: Option<LabelsOwnDice>,
+}
+
 /// An image with its ground truth, read once for all settings.
 struct Sample {
     stem: String,
@@ -72,19 +87,37 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     if args.sweep {
         return sweep(args, &samples);
     }
-    let evaluation = match evaluate(&args.vision, &samples) {
-        Ok(evaluation) => evaluation,
+    let report = evaluate(&args.vision, &samples).and_then(|evaluation| {
+        Ok(Report {
+            evaluation,
+            labels_own_union_dice: labels_own_dice(&samples)?,
+        })
+    });
+    let report = match report {
+        Ok(report) => report,
         Err(message) => {
             eprintln!("error: {message}");
             return Status::TaskFailed;
         }
     };
     if args.json {
-        print_json(&evaluation)
+        print_json(&report)
     } else {
-        print_evaluation(&args.dir, &evaluation);
+        print_evaluation(&args.dir, &report);
         Status::Success
     }
+}
+
+fn labels_own_dice(samples: &[Sample]) -> Result<Option<LabelsOwnDice>, String> {
+    let truths: Vec<&GroundTruth> = samples.iter().map(|s| &s.truth).collect();
+    let consistency = label_consistency(&truths)
+        .map_err(|error| format!("drawing the labelled centre lines: {error}"))?;
+    Ok(consistency.and_then(|c| {
+        Summary::of(&c.union_dice).map(|union_dice| LabelsOwnDice {
+            width_px: c.width_px,
+            union_dice,
+        })
+    }))
 }
 
 fn print_json(value: &impl Serialize) -> Status {
@@ -321,18 +354,30 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     Status::Success
 }
 
-fn print_evaluation(dir: &Path, e: &Evaluation) {
+fn print_evaluation(dir: &Path, report: &Report) {
+    let e = &report.evaluation;
     println!("{}: {} images", dir.display(), e.images);
+    let summary = |s: &Summary| {
+        format!(
+            "mean {:.3}  median {:.3}  p95 {:.3}  max {:.3}",
+            s.mean, s.median, s.p95, s.max
+        )
+    };
     let line = |name: &str, s: &Option<Summary>| {
         if let Some(s) = s {
-            println!(
-                "  {name:<22} mean {:.3}  median {:.3}  p95 {:.3}  max {:.3}",
-                s.mean, s.median, s.p95, s.max
-            );
+            println!("  {name:<22} {}", summary(s));
         }
     };
     line("union IoU", &e.union_iou);
     line("union DICE", &e.union_dice);
+    if let Some(labels) = &report.labels_own_union_dice {
+        println!(
+            "  {:<22} {}  (the labelled centre lines drawn {:.1} px wide against the labelled masks)",
+            "labels' own union DICE",
+            summary(&labels.union_dice),
+            labels.width_px
+        );
+    }
     line("instance DICE", &e.instance_dice);
     if let Some(rate) = &e.count_right {
         println!(

@@ -409,26 +409,40 @@ fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bo
 
 /// The pixels of `mask` within `thickness` of the path.
 fn path_mask(mask: &Mat, points_px: &[[f64; 2]], thickness: i32) -> Result<Mat, VisionError> {
-    let mut drawn = mask::zeros_u8(mask.rows(), mask.cols())?;
-    let pts: Vector<Point> = points_px
+    let drawn = draw_paths(mask.rows(), mask.cols(), &[points_px], thickness)?;
+    let mut own = Mat::default();
+    core::bitwise_and(&drawn, mask, &mut own, &core::no_array()).map_err(cv("instance mask"))?;
+    Ok(own)
+}
+
+/// A `rows` × `cols` 0/255 mask of `paths` drawn `thickness` px wide
+/// (points rounded to whole pixels).
+pub(crate) fn draw_paths(
+    rows: i32,
+    cols: i32,
+    paths: &[&[[f64; 2]]],
+    thickness: i32,
+) -> Result<Mat, VisionError> {
+    let mut drawn = mask::zeros_u8(rows, cols)?;
+    let curves: Vector<Vector<Point>> = paths
         .iter()
-        .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+        .map(|path| {
+            path.iter()
+                .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+                .collect()
+        })
         .collect();
-    let mut contours = Vector::<Vector<Point>>::new();
-    contours.push(pts);
     imgproc::polylines(
         &mut drawn,
-        &contours,
+        &curves,
         false,
         Scalar::all(255.0),
         thickness,
         imgproc::LINE_8,
         0,
     )
-    .map_err(cv("draw instance path"))?;
-    let mut own = Mat::default();
-    core::bitwise_and(&drawn, mask, &mut own, &core::no_array()).map_err(cv("instance mask"))?;
-    Ok(own)
+    .map_err(cv("draw paths"))?;
+    Ok(drawn)
 }
 
 /// A full-image copy of `part`, the contents of region `roi`, zero
