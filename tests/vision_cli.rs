@@ -163,6 +163,35 @@ fn a_missing_network_is_a_clear_error() {
     assert!(err.contains("/no/such/model.onnx"), "{err}");
 }
 
+/// The network and its runtime are found where the set-up put them from
+/// any working directory, with nothing in the environment pointing there.
+#[test]
+fn detect_finds_the_network_from_any_working_directory() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_scene(
+        dir.path(),
+        "elsewhere",
+        vec![cable([60.0, 120.0], [580.0, 380.0])],
+        false,
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        .args(["detect", "elsewhere.jpg", "--mask", "network", "--json"])
+        .args(["--straight-edge-radius-px", "0"])
+        .current_dir(dir.path())
+        .env_remove("ORT_DYLIB_PATH")
+        .output()
+        .expect("cablecell runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let found: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(found[0]["mask_used"], "network", "{found}");
+    assert_eq!(
+        found[0]["cables"].as_array().map(Vec::len),
+        Some(1),
+        "{found}"
+    );
+}
+
 #[test]
 fn eval_vision_names_every_malformed_image_and_where() {
     let dir = tempfile::tempdir().expect("tempdir");

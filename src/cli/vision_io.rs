@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE, runtime_library,
+    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE,
+    runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
@@ -24,9 +25,10 @@ pub struct VisionArgs {
     #[arg(long, value_enum, default_value = "skeleton")]
     pub instances: InstancesArg,
     /// The segmentation network.
-    #[arg(long, default_value = "models/cable_segmentation.onnx")]
+    #[arg(long, default_value = DEFAULT_MODEL)]
     pub model: PathBuf,
-    /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else .setup/onnxruntime/).
+    /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else the
+    /// checkout's .setup/onnxruntime/).
     #[arg(long)]
     pub onnxruntime: Option<PathBuf>,
     /// The network's probability above which a pixel is cable.

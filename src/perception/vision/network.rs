@@ -156,8 +156,7 @@ pub fn network_size(width: i32, height: i32, scale: f64) -> (i32, i32) {
 
 impl SegmentationNet {
     /// Loads `model` into a session on the ONNX Runtime library
-    /// `runtime_library` (ort's load-dynamic; the lead passes
-    /// `ORT_DYLIB_PATH` or `.setup/onnxruntime/libonnxruntime.so.1.31.1`).
+    /// `runtime_library` (ort's load-dynamic; see [`runtime_library`]).
     /// The library is loaded once per process: a second `load` naming
     /// another library gives [`NetworkError::Runtime`].
     pub fn load(model: &Path, runtime_library: &Path) -> Result<Self, NetworkError> {
@@ -291,8 +290,19 @@ impl SegmentationNet {
 }
 
 /// Where the ONNX Runtime library is when nothing says otherwise: where
-/// `scripts/setup` puts it.
-const DEFAULT_RUNTIME_LIBRARY: &str = ".setup/onnxruntime/libonnxruntime.so.1.31.1";
+/// `scripts/setup` puts it, in the checkout this binary was built from, so
+/// that it is found from any working directory.
+const DEFAULT_RUNTIME_LIBRARY: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/.setup/onnxruntime/libonnxruntime.so.1.31.1"
+);
+
+/// The shipped segmentation network, in the checkout this binary was built
+/// from.
+pub const DEFAULT_MODEL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/cable_segmentation.onnx"
+);
 
 /// The ONNX Runtime library to load: `given`, else `$ORT_DYLIB_PATH`, else
 /// where the set-up puts it.
