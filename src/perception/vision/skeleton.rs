@@ -537,10 +537,12 @@ impl Graph {
         direction_leaving(&self.outward(branch), centre, width_px)
     }
 
-    /// The branch's direction at the junction: its direction past the
-    /// junction's distortion, turned on towards the junction by as much as
-    /// it turns over the next two widths, so that a cable bending through a
-    /// crossing is judged by its curve rather than its chord.
+    /// The branch's direction at the junction's centre: its direction past
+    /// the junction's distortion, turned on towards the centre by as much
+    /// as it turns over the next two widths, so that a cable bending
+    /// through a crossing is judged by its curve rather than its chord, and
+    /// branches leaving a shallow crossing's two junctions, far apart, are
+    /// compared at one point.
     fn branch_tangent(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
         let pts = self.outward(branch);
         let near = direction_leaving(&pts, centre, width_px);
@@ -554,8 +556,11 @@ impl Graph {
         let turn_rad = near_rad - far[1].atan2(far[0]);
         let turn_rad = turn_rad.sin().atan2(turn_rad.cos());
         // From the middle of the far stretch to the middle of the near one
-        // is one span; from there to the junction, skip + span / 2.
-        let back_rad = near_rad + turn_rad * (skip as f64 + 0.5 * span as f64) / span as f64;
+        // is one span; from there to the branch's start, skip + span / 2,
+        // and on to the junction's centre.
+        let to_centre_px = (pts[0][0] - centre[0]).hypot(pts[0][1] - centre[1]);
+        let back_px = skip as f64 + 0.5 * span as f64 + to_centre_px;
+        let back_rad = near_rad + turn_rad * back_px / span as f64;
         [back_rad.cos(), back_rad.sin()]
     }
 }
