@@ -225,9 +225,17 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         .iter()
         .map(|r| r["setting"].as_str().expect("setting"))
         .collect();
-    assert_eq!(settings.len(), 7, "{settings:?}");
+    assert_eq!(settings.len(), 8, "{settings:?}");
     assert!(settings[0].starts_with("classical mask"));
     assert!(settings.iter().any(|s| s.contains("superpixels")));
+    // The last row is the labels against themselves: the rendered masks are
+    // their centre lines' tubes, so they agree closely.
+    assert!(settings[7].starts_with("labels' own centre lines"));
+    assert!(
+        rows[7]["union_dice"].as_f64().expect("dice") > 0.9,
+        "{rows}"
+    );
+    assert!(rows[7]["total_ms_median"].is_null(), "{rows}");
     assert!(
         rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
         "{rows}"

@@ -327,6 +327,27 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             centerline_px: evaluation.centerline_px.map(|s| s.mean),
         });
     }
+    // The labels' agreement with themselves, for scale in the DICE column.
+    match labels_own_dice(samples) {
+        Ok(Some(labels)) => rows.push(SweepRow {
+            setting: format!(
+                "labels' own centre lines, drawn {:.1} px wide",
+                labels.width_px
+            ),
+            total_ms_median: None,
+            total_ms_p95: None,
+            union_dice: Some(labels.union_dice.mean),
+            count_right: None,
+            grasp_error_px_mean: None,
+            grasp_error_px_median: None,
+            centerline_px: None,
+        }),
+        Ok(None) => {}
+        Err(message) => {
+            eprintln!("error: {message}");
+            return Status::TaskFailed;
+        }
+    }
     if args.json {
         return print_json(&rows);
     }
