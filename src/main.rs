@@ -107,7 +107,9 @@ enum Command {
         no_record: bool,
     },
     /// Find every cable in images: its B-spline, the grasp point at s = 0.5
-    /// and the cable's direction there, and the time spent in each stage.
+    /// and the cable's direction there, and the time spent in each stage
+    /// (by a warmed-up pipeline: the first image is run once beforehand,
+    /// untimed, to load the network and set OpenCV up).
     Detect {
         #[arg(required = true)]
         images: Vec<PathBuf>,

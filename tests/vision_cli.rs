@@ -103,6 +103,18 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         notes.contains("1 straight detection(s) as edges"),
         "{notes}"
     );
+
+    // Read by a person: the one-off start-up first, then the image's
+    // warmed-up times.
+    let human = cablecell(&["detect", text(&image), "--straight-edge-radius-px", "0"]);
+    let printed = String::from_utf8_lossy(&human.stdout);
+    let lines: Vec<&str> = printed.lines().collect();
+    assert!(lines[0].starts_with("start-up: "), "{printed}");
+    assert!(
+        lines[1].contains("one.jpg: 1 cable(s), Classical mask"),
+        "{printed}"
+    );
+    assert!(lines[2].starts_with("  cable 0: grasp at ("), "{printed}");
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! `cablecell detect IMAGE...`
 
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
@@ -75,6 +76,7 @@ pub fn detect(
     let mut network = args.network();
     let mut reports = Vec::new();
     let mut status = Status::Success;
+    let mut warmed_up = false;
     for path in images {
         let image = match read_image(path) {
             Ok(image) => image,
@@ -84,6 +86,20 @@ pub fn detect(
                 continue;
             }
         };
+        if !warmed_up {
+            // One untimed run, so that the times reported are a warmed-up
+            // pipeline's, as in `eval-vision` and the benchmarks. An error
+            // here recurs in the timed run, which reports it.
+            warmed_up = true;
+            let start = Instant::now();
+            let _ = pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork));
+            if !json {
+                println!(
+                    "start-up: {:.1} ms (the first image run once, untimed: one-off set-up such as loading the network)",
+                    start.elapsed().as_secs_f64() * 1e3
+                );
+            }
+        }
         let output = match pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork)) {
             Ok(output) => output,
             Err(error) => {
