@@ -295,6 +295,12 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     assert!(printed.contains("instance count right"), "{printed}");
     assert!(printed.contains("labels' own union DICE"), "{printed}");
     assert!(
+        printed.contains(
+            "count wrong in         00000 (0 found, 1 labelled), 00001 (0 found, 2 labelled)"
+        ),
+        "{printed}"
+    );
+    assert!(
         printed.contains("note: 00001: dropped 2 straight detection(s) as edges"),
         "{printed}"
     );

@@ -411,6 +411,20 @@ fn print_evaluation(dir: &Path, report: &Report) {
             100.0 * rate.ci95_high
         );
     }
+    let miscounted: Vec<String> = e
+        .per_image
+        .iter()
+        .filter(|(_, score)| !score.count_right)
+        .map(|(stem, score)| {
+            format!(
+                "{stem} ({} found, {} labelled)",
+                score.predicted_count, score.truth_count
+            )
+        })
+        .collect();
+    if !miscounted.is_empty() {
+        println!("  {:<22} {}", "count wrong in", miscounted.join(", "));
+    }
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);
     for (stage, s) in &e.stage_ms {
