@@ -206,14 +206,17 @@ pub fn label_consistency(truths: &[&GroundTruth]) -> Result<Option<LabelConsiste
     if length_px == 0.0 {
         return Ok(None);
     }
+    let lines_per_truth: Vec<Vec<&[[f64; 2]]>> = truths
+        .iter()
+        .map(|t| t.polylines_px.iter().map(Vec::as_slice).collect())
+        .collect();
     let mut best: Option<(f64, LabelConsistency)> = None;
     for thickness_px in LABEL_THICKNESSES_PX {
         let mut area_px = 0.0;
         let mut union_dice = Vec::with_capacity(truths.len());
-        for truth in truths {
-            let lines: Vec<&[[f64; 2]]> = truth.polylines_px.iter().map(Vec::as_slice).collect();
+        for (truth, lines) in truths.iter().zip(&lines_per_truth) {
             let union = &truth.union_mask;
-            let drawn = draw_paths(union.rows(), union.cols(), &lines, thickness_px)?;
+            let drawn = draw_paths(union.rows(), union.cols(), lines, thickness_px)?;
             area_px += count(&drawn);
             union_dice.push(dice(&drawn, union));
         }
@@ -468,21 +471,21 @@ mod tests {
         );
     }
 
-    /// Truth whose masks are `lines` drawn `width_px` wide, moved down by
-    /// `shift_px`.
-    fn drawn_truth(lines: Vec<Vec<[f64; 2]>>, width_px: i32, shift_px: f64) -> GroundTruth {
+    /// Truth whose masks are `lines` drawn at OpenCV thickness
+    /// `thickness_px`, moved down by `shift_px`.
+    fn drawn_truth(lines: Vec<Vec<[f64; 2]>>, thickness_px: i32, shift_px: f64) -> GroundTruth {
         let shifted: Vec<Vec<[f64; 2]>> = lines
             .iter()
             .map(|l| l.iter().map(|p| [p[0], p[1] + shift_px]).collect())
             .collect();
         let masks: Vec<Mat> = shifted
             .iter()
-            .map(|l| draw_paths(120, 160, &[l.as_slice()], width_px).unwrap())
+            .map(|l| draw_paths(120, 160, &[l.as_slice()], thickness_px).unwrap())
             .collect();
         let all: Vec<&[[f64; 2]]> = shifted.iter().map(Vec::as_slice).collect();
         GroundTruth {
             masks,
-            union_mask: draw_paths(120, 160, &all, width_px).unwrap(),
+            union_mask: draw_paths(120, 160, &all, thickness_px).unwrap(),
             polylines_px: lines,
         }
     }
