@@ -301,8 +301,10 @@ pub fn clean_mask(raw: &Mat, min_blob_area_px: f64) -> Result<Mat, VisionError> 
     drop_small_blobs(&closed, min_blob_area_px)
 }
 
-/// Keeps the 8-connected blobs of at least `min_area_px` pixels.
-pub fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
+/// Keeps the 8-connected blobs of at least `min_area_px` pixels of a 0/255
+/// mask. Only the dropped blobs' bounding boxes are touched: most masks
+/// drop few blobs, all small.
+fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
     let mut labels = Mat::default();
     let mut stats = Mat::default();
     let mut centroids = Mat::default();
@@ -315,30 +317,36 @@ pub fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError
         core::CV_32S,
     )
     .map_err(cv("label mask blobs"))?;
-    let mut keep = vec![false; usize::try_from(count).unwrap_or(0)];
+    let mut out = mask.try_clone().map_err(cv("copy mask"))?;
+    let stat = |label: i32, which: i32| {
+        stats
+            .at_2d::<i32>(label, which)
+            .copied()
+            .map_err(cv("read blob statistics"))
+    };
     for label in 1..count {
-        let area = *stats
-            .at_2d::<i32>(label, imgproc::CC_STAT_AREA)
-            .map_err(cv("read blob area"))?;
-        if let Some(k) = keep.get_mut(label as usize) {
-            *k = f64::from(area) >= min_area_px;
+        if f64::from(stat(label, imgproc::CC_STAT_AREA)?) >= min_area_px {
+            continue;
         }
+        let bounds = core::Rect::new(
+            stat(label, imgproc::CC_STAT_LEFT)?,
+            stat(label, imgproc::CC_STAT_TOP)?,
+            stat(label, imgproc::CC_STAT_WIDTH)?,
+            stat(label, imgproc::CC_STAT_HEIGHT)?,
+        );
+        let mut is_blob = Mat::default();
+        core::compare(
+            &Mat::roi(&labels, bounds).map_err(cv("blob's labels"))?,
+            &Scalar::all(f64::from(label)),
+            &mut is_blob,
+            core::CMP_EQ,
+        )
+        .map_err(cv("find blob"))?;
+        Mat::roi_mut(&mut out, bounds)
+            .and_then(|mut roi| roi.set_to(&Scalar::all(0.0), &is_blob).map(|_| ()))
+            .map_err(cv("drop blob"))?;
     }
-    let labels = continuous(&labels)?;
-    let label_data = labels.data_typed::<i32>().map_err(cv("read blob labels"))?;
-    let out: Vec<u8> = label_data
-        .iter()
-        .map(|&l| {
-            if l > 0 && keep.get(l as usize).copied().unwrap_or(false) {
-                255
-            } else {
-                0
-            }
-        })
-        .collect();
-    Mat::new_rows_cols_with_data(mask.rows(), mask.cols(), &out)
-        .and_then(|m| m.try_clone())
-        .map_err(cv("build cleaned mask"))
+    Ok(out)
 }
 
 /// Makes the network's output a CV_8U 0/255 mask of `size`: 8-bit outputs
@@ -407,6 +415,28 @@ mod tests {
         )
         .unwrap();
         img
+    }
+
+    #[test]
+    fn only_blobs_below_the_area_are_dropped_even_inside_a_kept_blobs_reach() {
+        let mut mask = zeros_u8(30, 30).unwrap();
+        // A 5-pixel diagonal blob, and beside it a 36-pixel bar that enters
+        // the diagonal's bounding box (rows 10–14, columns 10–14) at its
+        // corner without touching it.
+        for i in 0..5 {
+            *mask.at_2d_mut::<u8>(10 + i, 10 + i).unwrap() = 255;
+        }
+        for row in 0..12 {
+            for col in 14..17 {
+                *mask.at_2d_mut::<u8>(row, col).unwrap() = 255;
+            }
+        }
+        let kept = drop_small_blobs(&mask, 10.0).unwrap();
+        assert_eq!(core::count_non_zero(&kept).unwrap(), 36);
+        assert_eq!(*kept.at_2d::<u8>(12, 12).unwrap(), 0);
+        assert_eq!(*kept.at_2d::<u8>(11, 14).unwrap(), 255);
+        let all = drop_small_blobs(&mask, 5.0).unwrap();
+        assert_eq!(core::count_non_zero(&all).unwrap(), 41);
     }
 
     #[test]
