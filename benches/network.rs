@@ -1,15 +1,17 @@
 //! The segmentation network on one 640 × 480 BGR image, pre- and
 //! post-processing included (resize down, ONNX Runtime with 2 intra-op
 //! threads, resize the probability up, threshold): what `SegmentationNet::
-//! mask` costs the detector per camera frame, at three input sizes; and
-//! the whole pipeline with it. Uses the first held-out
+//! mask` costs the detector per camera frame, at three input sizes, and
+//! the float network it was quantized from; and the whole pipeline with it. Uses the first held-out
 //! photograph of cables-dev when it lies beside the project, else a drawn
 //! image. The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
 //! `.setup/onnxruntime/` (run `scripts/setup`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use cablecell::perception::vision::network::{DEFAULT_INPUT_SCALE, SegmentationNet};
+use cablecell::perception::vision::network::{
+    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, FLOAT_MODEL, SegmentationNet,
+};
 use cablecell::perception::vision::{MaskMethod, MaskNetwork, Pipeline, VisionConfig};
 use criterion::{Criterion, criterion_group, criterion_main};
 use opencv::core::{CV_8UC3, Mat, Point, Scalar, Vector};
@@ -55,18 +57,15 @@ fn bench(c: &mut Criterion) {
             || root.join(".setup/onnxruntime/libonnxruntime.so.1.31.1"),
             PathBuf::from,
         );
-    let mut net =
-        match SegmentationNet::load(&root.join("models/cable_segmentation.onnx"), &library) {
-            Ok(net) => net,
-            Err(e) => panic!("{e}"),
-        };
+    let load = |model: &str| match SegmentationNet::load(Path::new(model), &library) {
+        Ok(net) => net,
+        Err(e) => panic!("{e}"),
+    };
     let image = image(&root);
-    c.bench_function("network mask 640x480", |b| {
-        b.iter(|| net.mask(std::hint::black_box(&image)).expect("inference"));
-    });
     // The network's input size against its cost (eval-vision --sweep gives
     // the error that goes with each).
-    for scale in [0.375, 0.75] {
+    let mut net = load(DEFAULT_MODEL);
+    for scale in [DEFAULT_INPUT_SCALE, 0.5, 0.75] {
         net.input_scale = scale;
         c.bench_function(
             &format!("network mask 640x480 at input scale {scale}"),
@@ -76,6 +75,14 @@ fn bench(c: &mut Criterion) {
         );
     }
     net.input_scale = DEFAULT_INPUT_SCALE;
+    // The float network the shipped 8-bit one was quantized from.
+    let mut float = load(FLOAT_MODEL);
+    c.bench_function(
+        &format!("float network mask 640x480 at input scale {DEFAULT_INPUT_SCALE}"),
+        |b| {
+            b.iter(|| float.mask(std::hint::black_box(&image)).expect("inference"));
+        },
+    );
     // Image in, grasp frames out, as the detector runs it.
     let mut pipeline = Pipeline::new(VisionConfig {
         mask: MaskMethod::Network,

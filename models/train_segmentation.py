@@ -19,7 +19,10 @@ Data:
   and cluttered backgrounds (noise, stripes, checkers, wood, print), with
   crossings, light, blur and noise. Their masks are exact by construction.
 
-The exported model's contract (what Rust must do) is in models/README.md:
+The float model is then quantized to 8-bit integers
+(quantize_segmentation.py, which also runs alone), the model the Rust side
+runs; the float one is kept beside it, as NAME_float.onnx, for comparison.
+The exported models' contract (what Rust must do) is in models/README.md:
 input `bgr`, float32, shape [1, H, W, 3] (NHWC), the image's B, G, R
 values as they are (0..255, no scaling: the model normalises inside); H and
 W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
@@ -49,6 +52,8 @@ import numpy as np
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
+
+from quantize_segmentation import quantize
 
 # The camera's size and the size the network runs at.
 FULL_W, FULL_H = 640, 480
@@ -357,7 +362,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, default=here.parent.parent / "shared" / "data" / "cables-dev",
                         help="the cables-dev folder (default: ../shared/data/cables-dev from the project's root)")
-    parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx")
+    parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx",
+                        help="the 8-bit model the Rust side runs; the float model it is quantized from "
+                             "is written beside it, as NAME_float.onnx")
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--steps", type=int, default=1800)
     parser.add_argument("--batch", type=int, default=16)
@@ -367,7 +374,7 @@ def main() -> int:
     parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
     parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--eval-only", action="store_true", help="measure an existing --out model")
+    parser.add_argument("--eval-only", action="store_true", help="measure existing models")
     args = parser.parse_args()
 
     torch.set_num_threads(args.threads)
@@ -376,6 +383,7 @@ def main() -> int:
     if not args.data.is_dir():
         print(f"no data at {args.data}", file=sys.stderr)
         return 2
+    float_out = args.out.with_name(f"{args.out.stem}_float.onnx")
     if not args.eval_only and (args.synthetic is None or not args.synthetic.is_dir()):
         print(f"no rendered images at {args.synthetic}: pass --synthetic DIR, made by "
               "`cablecell render-dataset DIR --count 2000 --seed 11`", file=sys.stderr)
@@ -383,16 +391,22 @@ def main() -> int:
     t0 = time.time()
     if not args.eval_only:
         model = train(args)
-        export(model, args.out)
+        export(model, float_out)
         print(f"training and export took {time.time() - t0:.0f} s", flush=True)
+        quantize(float_out, args.out, args.data)  # the shipped model
     thresholds = [0.3, 0.4, 0.5, 0.6, 0.7]
-    train_res = evaluate(args.out, args.data, TRAIN_IDS, thresholds)
-    held_res = evaluate(args.out, args.data, HELD_OUT_IDS, thresholds)
-    for t in thresholds:
-        print(f"threshold {t}: train IoU {train_res[t]['iou']:.4f} DICE {train_res[t]['dice']:.4f} | "
-              f"held-out IoU {held_res[t]['iou']:.4f} DICE {held_res[t]['dice']:.4f} (min {held_res[t]['dice_min']:.4f})")
-    print(f"onnxruntime median inference at {NET_W}x{NET_H}, 2 threads: {held_res['median_ms']:.2f} ms")
-    print(json.dumps({"held_out": {str(k): v for k, v in held_res.items()}}))
+    summary = {}
+    for name, path in (("float", float_out), ("8-bit", args.out)):
+        train_res = evaluate(path, args.data, TRAIN_IDS, thresholds)
+        held_res = evaluate(path, args.data, HELD_OUT_IDS, thresholds)
+        print(f"{name} model {path}:")
+        for t in thresholds:
+            print(f"  threshold {t}: train IoU {train_res[t]['iou']:.4f} DICE {train_res[t]['dice']:.4f} | "
+                  f"held-out IoU {held_res[t]['iou']:.4f} DICE {held_res[t]['dice']:.4f} "
+                  f"(min {held_res[t]['dice_min']:.4f})")
+        print(f"  onnxruntime median inference at {NET_W}x{NET_H}, 2 threads: {held_res['median_ms']:.2f} ms")
+        summary[name] = {str(k): v for k, v in held_res.items()}
+    print(json.dumps({"held_out": summary}))
     return 0
 
 

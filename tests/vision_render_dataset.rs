@@ -225,17 +225,19 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         .iter()
         .map(|r| r["setting"].as_str().expect("setting"))
         .collect();
-    assert_eq!(settings.len(), 8, "{settings:?}");
+    assert_eq!(settings.len(), 9, "{settings:?}");
     assert!(settings[0].starts_with("classical mask"));
     assert!(settings.iter().any(|s| s.contains("superpixels")));
+    // The shipped 8-bit network scores as the float one it came from.
+    assert!(settings[1].starts_with("network at 0.375×"));
+    assert!(settings[4].starts_with("float network at 0.375×"));
+    let dice = |row: usize| rows[row]["union_dice"].as_f64().expect("dice");
+    assert!((dice(1) - dice(4)).abs() < 0.02, "{rows}");
     // The last row is the labels against themselves: the rendered masks are
     // their centre lines' tubes, so they agree closely.
-    assert!(settings[7].starts_with("labels' own centre lines"));
-    assert!(
-        rows[7]["union_dice"].as_f64().expect("dice") > 0.9,
-        "{rows}"
-    );
-    assert!(rows[7]["total_ms_median"].is_null(), "{rows}");
+    assert!(settings[8].starts_with("labels' own centre lines"));
+    assert!(dice(8) > 0.9, "{rows}");
+    assert!(rows[8]["total_ms_median"].is_null(), "{rows}");
     assert!(
         rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
         "{rows}"

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::MaskNetwork;
 use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
+use cablecell::perception::vision::network::FLOAT_MODEL;
 use clap::Args;
 use opencv::core::Mat;
 use serde::Serialize;
@@ -24,8 +25,8 @@ pub struct EvalVisionArgs {
     /// Score only images whose name sorts at or before this, e.g. 00044.
     #[arg(long)]
     pub to: Option<String>,
-    /// Score the main settings (mask method, network input size, instance
-    /// method, superpixel size) one after another and print a table of run
+    /// Score the main settings (mask method, network input size, 8-bit or
+    /// float network, instance method, superpixel size) one after another and print a table of run
     /// time against error; the other vision options set what a row does
     /// not.
     #[arg(long)]
@@ -264,7 +265,8 @@ struct SweepRow {
 }
 
 /// The settings the sweep compares: the mask method, the network's input
-/// size, the instance method and the superpixels' size, each varied from
+/// size, the shipped 8-bit network or the float one it came from, the
+/// instance method and the superpixels' size, each varied from
 /// the command line's settings.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
@@ -289,6 +291,17 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
             }),
         ));
     }
+    settings.push((
+        format!(
+            "float network at {}×, skeleton (cable_segmentation_float.onnx)",
+            base.net_scale
+        ),
+        with(&|a| {
+            a.mask = MaskArg::Network;
+            a.model = PathBuf::from(FLOAT_MODEL);
+            a.instances = InstancesArg::Skeleton;
+        }),
+    ));
     for widths in [1.5, 2.0, 3.0] {
         settings.push((
             format!(

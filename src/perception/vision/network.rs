@@ -298,10 +298,18 @@ const DEFAULT_RUNTIME_LIBRARY: &str = concat!(
 );
 
 /// The shipped segmentation network, in the checkout this binary was built
-/// from.
+/// from: 8-bit, quantized from [`FLOAT_MODEL`], which it matches at about
+/// 1.6 times the speed.
 pub const DEFAULT_MODEL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/models/cable_segmentation.onnx"
+);
+
+/// The float network the shipped one was quantized from, kept to compare
+/// their speed and accuracy (`eval-vision --sweep`).
+pub const FLOAT_MODEL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/cable_segmentation_float.onnx"
 );
 
 /// The ONNX Runtime library to load: `given`, else `$ORT_DYLIB_PATH`, else
