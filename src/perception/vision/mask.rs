@@ -10,6 +10,8 @@
 //! on that distance splits cable from table, morphology cleans the edge and
 //! blobs too small to be cable are dropped.
 
+use std::borrow::Cow;
+
 use opencv::core::{self, Mat, Point, Scalar, Size};
 use opencv::imgproc;
 use opencv::prelude::*;
@@ -68,21 +70,22 @@ pub struct BackgroundStats {
 }
 
 /// Brings any supported image to 8-bit, 3-channel BGR, so the later stages
-/// see one pixel format: gray and BGRA are converted, 16-bit scaled down.
-pub fn to_bgr8(image: &Mat) -> Result<Mat, VisionError> {
+/// see one pixel format: gray and BGRA are converted, 16-bit scaled down;
+/// an image already 8-bit BGR is borrowed, not copied.
+pub fn to_bgr8(image: &Mat) -> Result<Cow<'_, Mat>, VisionError> {
     if image.empty() || image.rows() <= 0 || image.cols() <= 0 {
         return Err(VisionError::EmptyImage { path: None });
     }
     let channels = image.channels();
     let depth = image.depth();
     let eight_bit = match depth {
-        core::CV_8U => image.try_clone().map_err(cv("copy input"))?,
+        core::CV_8U => Cow::Borrowed(image),
         core::CV_16U => {
             let mut out = Mat::default();
             image
                 .convert_to(&mut out, core::CV_8U, 1.0 / 257.0, 0.0)
                 .map_err(cv("scale 16-bit input"))?;
-            out
+            Cow::Owned(out)
         }
         _ => return Err(VisionError::UnsupportedImage { channels, depth }),
     };
@@ -93,8 +96,8 @@ pub fn to_bgr8(image: &Mat) -> Result<Mat, VisionError> {
         _ => return Err(VisionError::UnsupportedImage { channels, depth }),
     };
     let mut bgr = Mat::default();
-    imgproc::cvt_color(&eight_bit, &mut bgr, code, 0).map_err(cv("convert input to BGR"))?;
-    Ok(bgr)
+    imgproc::cvt_color(&*eight_bit, &mut bgr, code, 0).map_err(cv("convert input to BGR"))?;
+    Ok(Cow::Owned(bgr))
 }
 
 /// The bytes of a continuous 8-bit matrix (copying it first when it is a
@@ -500,6 +503,8 @@ mod tests {
             let bgr = to_bgr8(&img).unwrap();
             assert_eq!(bgr.typ(), core::CV_8UC3, "type {typ}");
         }
+        let bgr8 = Mat::new_rows_cols_with_default(4, 5, core::CV_8UC3, Scalar::all(9.0)).unwrap();
+        assert!(matches!(to_bgr8(&bgr8).unwrap(), Cow::Borrowed(_)));
         let float =
             Mat::new_rows_cols_with_default(4, 5, core::CV_32FC3, Scalar::all(0.5)).unwrap();
         assert!(matches!(

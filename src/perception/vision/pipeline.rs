@@ -1,6 +1,7 @@
 //! The vision pipeline: image → mask → one path per cable → B-spline →
 //! grasp point and direction, each stage timed.
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use opencv::core::{self, Mat, Point, Rect, Scalar, Vector};
@@ -212,9 +213,11 @@ impl Pipeline {
         let work = if roi == full {
             image
         } else {
-            Mat::roi(&image, roi)
-                .and_then(|m| m.try_clone())
-                .map_err(cv("crop to region of interest"))?
+            Cow::Owned(
+                Mat::roi(&*image, roi)
+                    .and_then(|m| m.try_clone())
+                    .map_err(cv("crop to region of interest"))?,
+            )
         };
         timings_ms.push(("prepare", ms_since(start)));
 
