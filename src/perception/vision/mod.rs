@@ -9,6 +9,7 @@ pub mod eval;
 pub mod grasp_frame;
 pub mod mask;
 pub mod network;
+pub mod paths;
 pub mod pipeline;
 pub mod skeleton;
 pub mod spline;

@@ -10,6 +10,7 @@ use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
 use super::mask::{self, BackgroundStats};
+use super::paths;
 use super::skeleton;
 use super::spline::{self, BSpline};
 
@@ -324,7 +325,7 @@ impl Pipeline {
         // A skeleton ends about half a width short of where its cable
         // leaves the region.
         let margin_px = found.width_px + 2.0;
-        let at_border = |p: &[f64; 2]| skeleton::near_border(*p, size_px, margin_px);
+        let at_border = |p: &[f64; 2]| paths::near_border(*p, size_px, margin_px);
         let paths: Vec<_> = found
             .paths
             .iter()

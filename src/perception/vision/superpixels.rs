@@ -17,7 +17,7 @@ use opencv::ximgproc::{self, SuperpixelSLICTrait, SuperpixelSLICTraitConst};
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::skeleton::{FoundPaths, finish_paths};
+use super::paths::{FoundPaths, finish_paths};
 
 /// Superpixel side, in cable widths, unless set otherwise: about two, so
 /// that a cable is one superpixel across and each node has a clear

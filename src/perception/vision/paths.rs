@@ -1,0 +1,388 @@
+//! What both instance methods (skeleton and superpixels) do with the pixel
+//! paths they find, before splines are fitted: paths that run along the
+//! image border are cut there, pieces that continue each other across a
+//! short gap (a mask broken at a ferrule, a glint or a crossing) are joined
+//! into one cable, and short scraps are dropped.
+
+use opencv::core::Mat;
+use opencv::prelude::*;
+
+/// Two paths whose ends lie at most this many cable widths (plus
+/// [`JOIN_GAP_EXTRA_PX`]) apart, and continue each other, are one cable
+/// broken by a gap in the mask: at a ferrule, a glint, a shadow, or where
+/// a crossing was resolved wrongly.
+const JOIN_GAP_WIDTHS: f64 = 4.0;
+const JOIN_GAP_EXTRA_PX: f64 = 4.0;
+/// Paths continue each other when neither end, nor the step between them,
+/// turns by more than this.
+const JOIN_MAX_BEND_RAD: f64 = 0.45;
+/// An end's direction is taken over this many cable widths of its path
+/// (at least [`JOIN_TANGENT_MIN_PX`]): long enough to ignore the ragged
+/// last pixels, short enough to follow a bend.
+const JOIN_TANGENT_WIDTHS: f64 = 2.0;
+const JOIN_TANGENT_MIN_PX: f64 = 8.0;
+/// Skeleton pixels this close to the mask's border, in cable widths (plus
+/// [`BORDER_CUT_EXTRA_PX`]), may follow the border rather than a cable:
+/// where two cables leave the view side by side, the network's mask often
+/// joins them with a band along the border, whose skeleton runs 2–3 px in.
+/// A cable half out of view keeps its skeleton further in.
+const BORDER_CUT_WIDTHS: f64 = 0.25;
+const BORDER_CUT_EXTRA_PX: f64 = 2.0;
+/// A path that runs along the border and turns by more than this there
+/// (its direction over [`JOIN_TANGENT_WIDTHS`] before and after) is two
+/// cables: the annotated wires of cables-dev turn by at most 45° over 16 px
+/// either side of any point.
+const BORDER_CUT_TURN_RAD: f64 = std::f64::consts::FRAC_PI_2;
+/// A path's end that runs along the border and turns from the path by more
+/// than this is a hook of the thinning, not cable.
+const BORDER_HOOK_TURN_RAD: f64 = std::f64::consts::FRAC_PI_4;
+
+/// One cable's centreline as points along it (skeleton pixels, or the
+/// superpixel walk's), from one end to the other (gaps where it crosses
+/// another cable).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CablePath {
+    /// Pixel centres, in image coordinates (x right, y down).
+    pub points_px: Vec<[f64; 2]>,
+    /// Length along the points.
+    pub length_px: f64,
+}
+
+/// What an instance method found in a mask.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoundPaths {
+    /// One path per cable, at least the minimum length, in a deterministic
+    /// order (by their first point).
+    pub paths: Vec<CablePath>,
+    /// The cables' typical width: mask area over skeleton length.
+    pub width_px: f64,
+}
+
+/// Length along `points`.
+pub(super) fn polyline_length(points: &[[f64; 2]]) -> f64 {
+    points
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
+}
+
+/// The angle between two directions (not necessarily unit).
+pub(super) fn angle_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let norms = a[0].hypot(a[1]) * b[0].hypot(b[1]);
+    if norms == 0.0 {
+        return 0.0;
+    }
+    ((a[0] * b[0] + a[1] * b[1]) / norms)
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
+/// The unit direction in which `points` leaves its last point, over about
+/// `span_px` of it; `None` for a path too short to say.
+fn end_direction(points: &[[f64; 2]], span_px: f64) -> Option<[f64; 2]> {
+    let end = *points.last()?;
+    let mut travelled = 0.0;
+    let mut from = end;
+    for w in points.windows(2).rev() {
+        travelled += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        from = w[0];
+        if travelled >= span_px {
+            break;
+        }
+    }
+    let (dx, dy) = (end[0] - from[0], end[1] - from[1]);
+    let norm = dx.hypot(dy);
+    (norm > 1.0).then(|| [dx / norm, dy / norm])
+}
+
+/// How much of a path, for cables `width_px` wide, gives an end's direction
+/// (see [`JOIN_TANGENT_WIDTHS`]).
+pub(super) fn tangent_span_px(width_px: f64) -> f64 {
+    (JOIN_TANGENT_WIDTHS * width_px).max(JOIN_TANGENT_MIN_PX)
+}
+
+/// Joins paths that continue each other across a short gap (see
+/// [`JOIN_GAP_WIDTHS`]), best-aligned pair first, until no pair does.
+/// Each path's ends are looked at in both directions, so the result may
+/// run either way.
+pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<Vec<[f64; 2]>> {
+    let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
+    let span_px = tangent_span_px(width_px);
+    loop {
+        // Every path's two ends: (path, reversed?, end point, outward direction).
+        let mut ends = Vec::new();
+        for (i, path) in paths.iter().enumerate() {
+            let mut backwards = path.clone();
+            backwards.reverse();
+            for (reversed, oriented) in [(false, path), (true, &backwards)] {
+                if let (Some(&point), Some(direction)) =
+                    (oriented.last(), end_direction(oriented, span_px))
+                {
+                    ends.push((i, reversed, point, direction));
+                }
+            }
+        }
+        let mut best: Option<(f64, usize, bool, usize, bool)> = None;
+        for &(i, ri, pa, da) in &ends {
+            for &(j, rj, pb, db) in &ends {
+                if i >= j {
+                    continue;
+                }
+                let gap = [pb[0] - pa[0], pb[1] - pa[1]];
+                let gap_px = gap[0].hypot(gap[1]);
+                if gap_px > max_gap_px {
+                    continue;
+                }
+                let onward = [-db[0], -db[1]];
+                let mut bend = angle_rad(da, onward);
+                if gap_px > 0.5 * width_px.max(2.0) {
+                    bend = bend.max(angle_rad(da, gap)).max(angle_rad(gap, onward));
+                }
+                if bend <= JOIN_MAX_BEND_RAD && best.is_none_or(|b| bend < b.0) {
+                    best = Some((bend, i, ri, j, rj));
+                }
+            }
+        }
+        let Some((_, i, ri, j, rj)) = best else {
+            return paths;
+        };
+        // Path i leaves through the joined end; path j enters through its.
+        let mut second = paths.swap_remove(j);
+        let first = &mut paths[i];
+        if ri {
+            first.reverse();
+        }
+        if !rj {
+            second.reverse();
+        }
+        first.extend(second);
+    }
+}
+
+/// Whether `p` lies within `margin_px` of the border of a mask of `size_px`
+/// (columns, rows).
+pub(super) fn near_border(p: [f64; 2], size_px: [f64; 2], margin_px: f64) -> bool {
+    p[0] < margin_px
+        || p[1] < margin_px
+        || p[0] > size_px[0] - 1.0 - margin_px
+        || p[1] > size_px[1] - 1.0 - margin_px
+}
+
+/// `path` cut where it runs within `margin_px` of the border of a mask of
+/// `size_px` (columns, rows) and turns there (see [`BORDER_CUT_TURN_RAD`]):
+/// two cables that leave the view side by side, joined by the mask along
+/// the border, come apart; an end that hooks along the border is trimmed
+/// off. A cable that grazes the border, or leaves it at a slant, turns
+/// less and stays whole. A path that lies along the border all the way is
+/// dropped: it is the band, or a cable all but out of view.
+fn cut_at_border(
+    path: Vec<[f64; 2]>,
+    size_px: [f64; 2],
+    margin_px: f64,
+    span_px: f64,
+) -> Vec<Vec<[f64; 2]>> {
+    let near = |p: &[f64; 2]| near_border(*p, size_px, margin_px);
+    let (Some(first), Some(last)) = (
+        path.iter().position(|p| !near(p)),
+        path.iter().rposition(|p| !near(p)),
+    ) else {
+        return Vec::new();
+    };
+    // How far the path turns from `before` (ending where a run along the
+    // border starts) to `after` (starting where it ends).
+    let turn_rad = |before: &[[f64; 2]], after: &[[f64; 2]]| {
+        let mut onward = after.to_vec();
+        onward.reverse();
+        match (
+            end_direction(before, span_px),
+            end_direction(&onward, span_px),
+        ) {
+            (Some(into), Some(back)) => angle_rad(into, [-back[0], -back[1]]),
+            _ => 0.0,
+        }
+    };
+    let keep_start = turn_rad(&path[..=first], &path[first..]) <= BORDER_HOOK_TURN_RAD;
+    let keep_end = turn_rad(&path[..=last], &path[last + 1..]) <= BORDER_HOOK_TURN_RAD;
+
+    let mut pieces = vec![if keep_start {
+        path[..=first].to_vec()
+    } else {
+        vec![path[first]]
+    }];
+    let mut i = first + 1;
+    while i <= last {
+        if !near(&path[i]) {
+            pieces.last_mut().expect("never empty").push(path[i]);
+            i += 1;
+            continue;
+        }
+        let end = i + path[i..]
+            .iter()
+            .position(|p| !near(p))
+            .expect("last is not near");
+        if turn_rad(&path[first..i], &path[end..=last]) > BORDER_CUT_TURN_RAD {
+            pieces.push(Vec::new());
+        } else {
+            pieces
+                .last_mut()
+                .expect("never empty")
+                .extend_from_slice(&path[i..end]);
+        }
+        i = end;
+    }
+    if keep_end {
+        pieces
+            .last_mut()
+            .expect("never empty")
+            .extend_from_slice(&path[last + 1..]);
+    }
+    pieces
+}
+
+/// The cables from pixel paths in `mask`, whichever method found them:
+/// paths cut where they run along the mask's border (see
+/// [`BORDER_CUT_WIDTHS`]), pieces that continue each other joined, each run
+/// from its end with the smaller (x, y) and kept if at least
+/// `min_length_px` long, sorted by their first point.
+pub(super) fn finish_paths(
+    paths: Vec<Vec<[f64; 2]>>,
+    mask: &Mat,
+    width_px: f64,
+    min_length_px: f64,
+) -> FoundPaths {
+    let size_px = [f64::from(mask.cols()), f64::from(mask.rows())];
+    let margin_px = BORDER_CUT_WIDTHS * width_px + BORDER_CUT_EXTRA_PX;
+    let span_px = tangent_span_px(width_px);
+    let paths = paths
+        .into_iter()
+        .flat_map(|path| cut_at_border(path, size_px, margin_px, span_px))
+        .collect();
+    let paths = join_continuations(paths, width_px);
+
+    let mut out: Vec<CablePath> = paths
+        .into_iter()
+        .filter_map(|mut points_px| {
+            let (first, last) = (*points_px.first()?, *points_px.last()?);
+            if (last[0], last[1]) < (first[0], first[1]) {
+                points_px.reverse();
+            }
+            let length_px = polyline_length(&points_px);
+            (length_px >= min_length_px).then_some(CablePath {
+                points_px,
+                length_px,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        let (pa, pb) = (a.points_px[0], b.points_px[0]);
+        (pa[0], pa[1])
+            .partial_cmp(&(pb[0], pb[1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    FoundPaths {
+        paths: out,
+        width_px,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::render::fixtures::segment_px;
+
+    #[test]
+    fn pieces_of_one_cable_across_a_gap_are_joined_in_order() {
+        // Given out of order and one of them backwards, 20 px apart, 8 px wide.
+        let pieces = vec![
+            segment_px([200.0, 100.0], [120.0, 100.0]),
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+        ];
+        let joined = join_continuations(pieces, 8.0);
+        assert_eq!(joined.len(), 1);
+        let path = &joined[0];
+        assert_eq!(path.len(), 101 + 81);
+        // One direction throughout: x never steps back.
+        let steps: Vec<f64> = path.windows(2).map(|w| w[1][0] - w[0][0]).collect();
+        assert!(steps.iter().all(|&d| d > 0.0) || steps.iter().all(|&d| d < 0.0));
+    }
+
+    #[test]
+    fn ends_that_meet_at_an_angle_or_lie_far_apart_stay_separate() {
+        let corner = vec![
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([110.0, 110.0], [110.0, 200.0]),
+        ];
+        assert_eq!(join_continuations(corner, 8.0).len(), 2);
+        let far = vec![
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([150.0, 100.0], [250.0, 100.0]),
+        ];
+        assert_eq!(join_continuations(far, 8.0).len(), 2);
+        // Side by side, parallel: their ends are close, but one does not
+        // lead into the other.
+        let parallel = vec![
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([105.0, 112.0], [200.0, 112.0]),
+        ];
+        assert_eq!(join_continuations(parallel, 8.0).len(), 2);
+    }
+
+    /// A 640 × 480 mask's border cut at 6 px, directions over 16 px.
+    fn cut(path: Vec<[f64; 2]>) -> Vec<Vec<[f64; 2]>> {
+        cut_at_border(path, [640.0, 480.0], 6.0, 16.0)
+    }
+
+    #[test]
+    fn two_cables_joined_along_the_border_are_cut_apart() {
+        // Into the right border, 30 px along it, and back out.
+        let mut path = segment_px([500.0, 100.0], [637.0, 200.0]);
+        path.extend(segment_px([637.0, 201.0], [637.0, 230.0]));
+        path.extend(segment_px([637.0, 231.0], [500.0, 330.0]));
+        let pieces = cut(path);
+        assert_eq!(pieces.len(), 2);
+        for piece in &pieces {
+            assert!(piece.iter().all(|p| p[0] < 634.0));
+            assert!(polyline_length(piece) > 150.0);
+        }
+    }
+
+    #[test]
+    fn a_hook_along_the_border_is_trimmed_off_a_cable_end() {
+        let mut path = segment_px([300.0, 100.0], [637.0, 100.0]);
+        path.extend(segment_px([637.0, 101.0], [637.0, 130.0]));
+        let pieces = cut(path.clone());
+        assert_eq!(pieces.len(), 1);
+        let end = *pieces[0].last().unwrap();
+        assert!(end[0] < 634.0 && (end[1] - 100.0).abs() < 0.5, "{end:?}");
+        // The same, walked from the hook.
+        path.reverse();
+        let mut pieces = cut(path);
+        assert_eq!(pieces.len(), 1);
+        pieces[0].reverse();
+        assert_eq!(*pieces[0].last().unwrap(), end);
+    }
+
+    #[test]
+    fn a_cable_leaving_at_a_slant_keeps_its_ends() {
+        // The last 40 px lie within 6 px of the top border, the first 45 px
+        // within 6 px of the left.
+        let mut path = segment_px([1.0, 300.0], [40.0, 200.0]);
+        path.extend(segment_px([41.0, 199.0], [400.0, 1.0]));
+        assert_eq!(cut(path.clone()), vec![path]);
+    }
+
+    #[test]
+    fn a_cable_grazing_the_border_stays_whole() {
+        // A 146 px arc whose leftmost point lies 4 px from the border.
+        let path: Vec<[f64; 2]> = (0..=260)
+            .map(|i| {
+                let a = 2.5 + 1.3 * f64::from(i) / 260.0;
+                [150.0 + 146.0 * a.cos(), 240.0 + 146.0 * a.sin()]
+            })
+            .collect();
+        let pieces = cut(path.clone());
+        assert_eq!(pieces, vec![path]);
+        // Lying along the border all the way, it is dropped.
+        assert!(cut(segment_px([3.0, 100.0], [3.0, 300.0])).is_empty());
+    }
+}
