@@ -211,6 +211,8 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         "--to",
         "00000",
         "--sweep",
+        "--rounds",
+        "2",
         "--json",
     ]);
     assert!(
@@ -238,6 +240,9 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
     assert!(settings[8].starts_with("labels' own centre lines"));
     assert!(dice(8) > 0.9, "{rows}");
     assert!(rows[8]["total_ms_median"].is_null(), "{rows}");
+    let no_rounds = cablecell(&["eval-vision", text(&out), "--sweep", "--rounds", "0"]);
+    assert_eq!(no_rounds.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&no_rounds.stderr).contains("--rounds"));
     assert!(
         rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
         "{rows}"

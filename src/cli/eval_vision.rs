@@ -1,4 +1,4 @@
-//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep]`
+//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep [--rounds N]]`
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,6 +31,12 @@ pub struct EvalVisionArgs {
     /// not.
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: time the settings in this many rounds, taking turns,
+    /// and give each one's median and 95th percentile over all rounds. A
+    /// machine's speed drifts over minutes; rounds spread the drift over
+    /// every setting instead of loading it onto a few.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
     #[arg(long)]
     pub json: bool,
 }
@@ -46,6 +52,9 @@ struct Evaluation {
     grasp_error_px: Option<Summary>,
     /// Per stage, and "total": median and 95th percentile among the rest.
     stage_ms: BTreeMap<&'static str, Summary>,
+    /// Each image's end-to-end time, in order, for the sweep's rounds.
+    #[serde(skip)]
+    total_ms: Vec<f64>,
     per_image: Vec<(String, ImageScore)>,
     /// What the pipeline said about an image (fallbacks taken, detections
     /// dropped as edges), by image.
@@ -246,6 +255,7 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
             .iter()
             .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))
             .collect(),
+        total_ms: stage_ms.remove("total").unwrap_or_default(),
         per_image,
         notes,
     })
@@ -319,20 +329,36 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
 }
 
 fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
+    let settings = sweep_settings(&args.vision);
+    // The first round's evaluations (the pipeline is deterministic, so
+    // later rounds score alike), and every round's end-to-end times.
+    let mut evaluations: Vec<Option<Evaluation>> = settings.iter().map(|_| None).collect();
+    let mut total_ms: Vec<Vec<f64>> = vec![Vec::new(); settings.len()];
+    for _ in 0..args.rounds {
+        for (k, (setting, vision)) in settings.iter().enumerate() {
+            let evaluation = match evaluate(vision, samples) {
+                Ok(evaluation) => evaluation,
+                Err(message) => {
+                    eprintln!("error: {setting}: {message}");
+                    return Status::TaskFailed;
+                }
+            };
+            total_ms[k].extend_from_slice(&evaluation.total_ms);
+            evaluations[k].get_or_insert(evaluation);
+        }
+    }
     let mut rows = Vec::new();
-    for (setting, vision) in sweep_settings(&args.vision) {
-        let evaluation = match evaluate(&vision, samples) {
-            Ok(evaluation) => evaluation,
-            Err(message) => {
-                eprintln!("error: {setting}: {message}");
-                return Status::TaskFailed;
-            }
+    for (((setting, _), evaluation), total_ms) in
+        settings.into_iter().zip(evaluations).zip(total_ms)
+    {
+        let Some(evaluation) = evaluation else {
+            continue;
         };
-        let total = evaluation.stage_ms.get("total");
+        let total = Summary::of(&total_ms);
         rows.push(SweepRow {
             setting,
-            total_ms_median: total.map(|s| s.median),
-            total_ms_p95: total.map(|s| s.p95),
+            total_ms_median: total.as_ref().map(|s| s.median),
+            total_ms_p95: total.as_ref().map(|s| s.p95),
             union_dice: evaluation.union_dice.map(|s| s.mean),
             count_right: evaluation.count_right.map(|r| r.rate),
             grasp_error_px_mean: evaluation.grasp_error_px.as_ref().map(|s| s.mean),
@@ -364,7 +390,12 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     if args.json {
         return print_json(&rows);
     }
-    println!("{}: {} images", args.dir.display(), samples.len());
+    println!(
+        "{}: {} images, timed in {} round(s)",
+        args.dir.display(),
+        samples.len(),
+        args.rounds
+    );
     println!(
         "| setting | median ms | p95 ms | union DICE | count right | grasp px mean | grasp px median | centre line px |"
     );
