@@ -11,6 +11,7 @@
 //! blobs too small to be cable are dropped.
 
 use std::borrow::Cow;
+use std::sync::LazyLock;
 
 use opencv::core::{self, Mat, Point, Scalar, Size};
 use opencv::imgproc;
@@ -100,15 +101,15 @@ pub fn to_bgr8(image: &Mat) -> Result<Cow<'_, Mat>, VisionError> {
     Ok(Cow::Owned(bgr))
 }
 
-/// The bytes of a continuous 8-bit matrix (copying it first when it is a
-/// view into a larger one).
-pub(crate) fn continuous(m: &Mat) -> Result<Mat, VisionError> {
+/// A matrix whose bytes are contiguous: `m` itself, or a copy of it when
+/// it is a view into a larger one.
+pub(crate) fn continuous(m: &Mat) -> Result<Cow<'_, Mat>, VisionError> {
     if m.is_continuous() {
-        m.try_clone().map_err(cv("copy matrix"))
+        Ok(Cow::Borrowed(m))
     } else {
         let mut out = Mat::default();
         m.copy_to(&mut out).map_err(cv("copy matrix"))?;
-        Ok(out)
+        Ok(Cow::Owned(out))
     }
 }
 
@@ -127,7 +128,7 @@ fn blurred_lab(bgr: &Mat) -> Result<Mat, VisionError> {
     let mut lab = Mat::default();
     imgproc::cvt_color(&blurred, &mut lab, imgproc::COLOR_BGR2Lab, 0)
         .map_err(cv("convert to Lab"))?;
-    continuous(&lab)
+    Ok(lab)
 }
 
 /// Per-channel medians of interleaved 3-channel bytes.
@@ -151,6 +152,18 @@ fn median3(bytes: &[u8]) -> [f64; 3] {
         }
     }
     out
+}
+
+/// `round(sqrt(n))`, at most 255, for every `n` that is a squared distance
+/// between two 8-bit Lab colours: the classical mask's distances, without a
+/// square root per pixel.
+fn rounded_roots() -> &'static [u8] {
+    static TABLE: LazyLock<Vec<u8>> = LazyLock::new(|| {
+        (0..=3 * 255 * 255)
+            .map(|n: u32| f64::from(n).sqrt().round().min(255.0) as u8)
+            .collect()
+    });
+    &TABLE
 }
 
 fn lab_distance(px: &[u8], bg: [f64; 3]) -> f64 {
@@ -212,7 +225,7 @@ fn local_background_lab(bgr: &Mat) -> Result<Mat, VisionError> {
         imgproc::INTER_LINEAR,
     )
     .map_err(cv("upscale the local background"))?;
-    continuous(&full)
+    Ok(full)
 }
 
 /// The classical mask (CV_8U, 0/255, the image's size): each pixel's colour
@@ -230,12 +243,15 @@ pub fn classical_mask(
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
     let local = local_background_lab(bgr)?;
     let local_bytes = local.data_bytes().map_err(cv("read Lab pixels"))?;
+    let rounded_root = rounded_roots();
     let distance: Vec<u8> = bytes
         .chunks_exact(3)
         .zip(local_bytes.chunks_exact(3))
         .map(|(px, bg)| {
-            let bg = [f64::from(bg[0]), f64::from(bg[1]), f64::from(bg[2])];
-            lab_distance(px, bg).round().min(255.0) as u8
+            let squared: usize = (0..3)
+                .map(|c| usize::from(px[c].abs_diff(bg[c])).pow(2))
+                .sum();
+            rounded_root[squared]
         })
         .collect();
     let distance_mat = Mat::new_rows_cols_with_data(bgr.rows(), bgr.cols(), &distance)
@@ -418,6 +434,16 @@ mod tests {
         )
         .unwrap();
         img
+    }
+
+    #[test]
+    fn the_distance_table_rounds_square_roots_and_stops_at_255() {
+        let table = rounded_roots();
+        assert_eq!(table.len(), 3 * 255 * 255 + 1);
+        // sqrt 2 = 1.41, sqrt 3 = 1.73, sqrt 64770 = 254.4995, sqrt 64771 = 254.5005
+        assert_eq!([table[0], table[2], table[3]], [0, 1, 2]);
+        assert_eq!([table[64770], table[64771]], [254, 255]);
+        assert_eq!(table[3 * 255 * 255], 255);
     }
 
     #[test]
