@@ -26,9 +26,9 @@ pub struct EvalVisionArgs {
     #[arg(long)]
     pub to: Option<String>,
     /// Score the main settings (mask method, network input size, 8-bit or
-    /// float network, instance method, superpixel size) one after another and print a table of run
-    /// time against error; the other vision options set what a row does
-    /// not.
+    /// float network, instance method, superpixel size) one after another
+    /// and print a table of run time against error; the other vision
+    /// options set what a row does not.
     #[arg(long)]
     pub sweep: bool,
     /// With --sweep: time the settings in this many rounds, taking turns,
