@@ -52,7 +52,8 @@ struct Evaluation {
     grasp_error_px: Option<Summary>,
     /// Per stage, and "total": median and 95th percentile among the rest.
     stage_ms: BTreeMap<&'static str, Summary>,
-    /// Each image's end-to-end time, in order, for the sweep's rounds.
+    /// Each image's end-to-end time, in order; the sweep adds its later
+    /// rounds' times here.
     #[serde(skip)]
     total_ms: Vec<f64>,
     per_image: Vec<(String, ImageScore)>,
@@ -331,10 +332,9 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
 fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     let settings = sweep_settings(&args.vision);
     // The first round's evaluations (the pipeline is deterministic, so
-    // later rounds score alike), and every round's end-to-end times.
-    let mut evaluations: Vec<Option<Evaluation>> = settings.iter().map(|_| None).collect();
-    let mut total_ms: Vec<Vec<f64>> = vec![Vec::new(); settings.len()];
-    for _ in 0..args.rounds {
+    // later rounds score alike), gathering every round's end-to-end times.
+    let mut evaluations: Vec<Evaluation> = Vec::with_capacity(settings.len());
+    for round in 0..args.rounds {
         for (k, (setting, vision)) in settings.iter().enumerate() {
             let evaluation = match evaluate(vision, samples) {
                 Ok(evaluation) => evaluation,
@@ -343,18 +343,16 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
                     return Status::TaskFailed;
                 }
             };
-            total_ms[k].extend_from_slice(&evaluation.total_ms);
-            evaluations[k].get_or_insert(evaluation);
+            if round == 0 {
+                evaluations.push(evaluation);
+            } else {
+                evaluations[k].total_ms.extend(evaluation.total_ms);
+            }
         }
     }
     let mut rows = Vec::new();
-    for (((setting, _), evaluation), total_ms) in
-        settings.into_iter().zip(evaluations).zip(total_ms)
-    {
-        let Some(evaluation) = evaluation else {
-            continue;
-        };
-        let total = Summary::of(&total_ms);
+    for ((setting, _), evaluation) in settings.into_iter().zip(evaluations) {
+        let total = Summary::of(&evaluation.total_ms);
         rows.push(SweepRow {
             setting,
             total_ms_median: total.as_ref().map(|s| s.median),

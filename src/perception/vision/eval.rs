@@ -14,8 +14,8 @@ use opencv::imgcodecs;
 use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
+use super::paths::polyline_length;
 use super::pipeline::{CableInstance, VisionOutput, draw_paths};
-use super::spline;
 
 /// One image's ground truth.
 #[derive(Debug)]
@@ -201,7 +201,7 @@ pub fn label_consistency(truths: &[&GroundTruth]) -> Result<Option<LabelConsiste
     let length_px: f64 = truths
         .iter()
         .flat_map(|t| &t.polylines_px)
-        .filter_map(|line| spline::arc_lengths_px(line).last().copied())
+        .map(|line| polyline_length(line))
         .sum();
     if length_px == 0.0 {
         return Ok(None);
