@@ -505,16 +505,30 @@ mod tests {
     /// Each drawn cable is followed by its own instance: the instance whose
     /// samples lie nearest the curve, all within `tol_px` of it.
     fn assert_each_followed(out: &VisionOutput, curves: &[Vec<[f64; 2]>], tol_px: f64) {
+        if let Err(why) = each_followed(out, curves, tol_px) {
+            panic!("{why}");
+        }
+    }
+
+    /// Whether each drawn cable is followed by its own instance (see
+    /// [`assert_each_followed`]), or why not.
+    fn each_followed(
+        out: &VisionOutput,
+        curves: &[Vec<[f64; 2]>],
+        tol_px: f64,
+    ) -> Result<(), String> {
         let ends: Vec<([f64; 2], [f64; 2])> = out
             .cables
             .iter()
             .map(|c| (c.spline.point(0.0), c.spline.point(1.0)))
             .collect();
-        assert_eq!(
-            out.cables.len(),
-            curves.len(),
-            "instances from-to: {ends:.0?}"
-        );
+        if out.cables.len() != curves.len() {
+            return Err(format!(
+                "{} instances for {} curves, from-to: {ends:.0?}",
+                out.cables.len(),
+                curves.len()
+            ));
+        }
         let mut used = vec![false; out.cables.len()];
         for curve in curves {
             let own = [curve.clone()];
@@ -532,10 +546,15 @@ mod tests {
                 })
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .expect("an instance");
-            assert!(worst < tol_px, "curve followed only within {worst:.1} px");
-            assert!(!used[best], "two curves matched one instance");
+            if worst >= tol_px {
+                return Err(format!("curve followed only within {worst:.1} px"));
+            }
+            if used[best] {
+                return Err("two curves matched one instance".into());
+            }
             used[best] = true;
         }
+        Ok(())
     }
 
     fn angle_diff_rad(a: f64, b: f64) -> f64 {
@@ -653,16 +672,16 @@ mod tests {
         back
     }
 
-    /// Two 10 px cables crossing at the image's centre, both bending the
-    /// same way: one heading `steep_rad` there and bending at
-    /// `steep_radius_px`, the other `crossing_rad` from it and bending at
-    /// `other_radius_px`. Each must be followed through the crossing.
-    fn assert_bending_crossing_resolved(
+    /// Two 10 px cables crossing at the image's centre: one heading
+    /// `steep_rad` there and bending at `steep_radius_px`, the other
+    /// `crossing_rad` from it and bending at `other_radius_px` (negative:
+    /// the other way). Whether each is followed through the crossing.
+    fn bending_crossing_followed(
         steep_rad: f64,
         steep_radius_px: f64,
         crossing_rad: f64,
         other_radius_px: f64,
-    ) {
+    ) -> Result<(), String> {
         let centre = [320.0, 240.0];
         let steep = curve_through(centre, steep_rad, -1.0 / steep_radius_px, 140);
         let other = curve_through(
@@ -684,10 +703,24 @@ mod tests {
         )
         .unwrap();
         let out = detect(&scene.bgr, VisionConfig::default());
-        eprintln!(
-            "crossing {crossing_rad} rad, steep {steep_rad} rad at {steep_radius_px} px, other at {other_radius_px} px"
-        );
-        assert_each_followed(&out, &[steep, other], 3.0);
+        each_followed(&out, &[steep, other], 3.0).map_err(|why| {
+            format!(
+                "crossing {crossing_rad} rad, steep {steep_rad} rad at {steep_radius_px} px, other at {other_radius_px} px: {why}"
+            )
+        })
+    }
+
+    fn assert_bending_crossing_resolved(
+        steep_rad: f64,
+        steep_radius_px: f64,
+        crossing_rad: f64,
+        other_radius_px: f64,
+    ) {
+        if let Err(why) =
+            bending_crossing_followed(steep_rad, steep_radius_px, crossing_rad, other_radius_px)
+        {
+            panic!("{why}");
+        }
     }
 
     #[test]
@@ -706,15 +739,47 @@ mod tests {
         // each is followed along its curve to the crossing's centre.
         assert_bending_crossing_resolved(-0.9, 90.0, 0.5, -180.0);
         assert_bending_crossing_resolved(-1.3, 110.0, 0.35, -250.0);
+        // At 29°, radii 110 and 250 px bending opposite ways, the junctions
+        // lie 8.6 widths apart, and the steep cable's path, bridged between
+        // them, was two pieces when the limit was 8 widths.
+        assert_bending_crossing_resolved(-0.9, 110.0, 0.5, -250.0);
+    }
+
+    #[test]
+    fn crossings_between_cables_bending_opposite_ways_are_mostly_resolved() {
+        // 90 crossings, 20° to 63°, the steeper cable as below, the other
+        // bending the other way at 180 or 250 px. 81 are resolved; before
+        // paths were bridged across crossings and junctions up to 10 widths
+        // apart merged, 62 were. The others are ambiguous to the eye too:
+        // the cables run over each other for several widths, and the paths
+        // cross inside that stretch.
+        let mut failures = Vec::new();
+        for crossing_rad in [0.35, 0.5, 0.7, 0.9, 1.1] {
+            for steep_rad in [-0.9, -1.1, -1.3] {
+                for steep_radius_px in [90.0, 110.0, 150.0] {
+                    for other_radius_px in [-180.0, -250.0] {
+                        if let Err(why) = bending_crossing_followed(
+                            steep_rad,
+                            steep_radius_px,
+                            crossing_rad,
+                            other_radius_px,
+                        ) {
+                            failures.push(why);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(failures.len() <= 9, "{:#?}", failures);
     }
 
     #[test]
     fn every_crossing_of_forty_degrees_or_more_between_bending_cables_is_resolved() {
         // 54 crossings: 40°, 52° and 63°; the steeper cable at three
         // headings and bending at radii of 90 to 150 px, the other bending
-        // the same way at 180 or 250 px (shallower crossings still fail
-        // often, and so do 3 of these 36 with the cables bending opposite
-        // ways).
+        // the same way at 180 or 250 px. At 20° and 29°, 18 of 36 such
+        // crossings are resolved: the sharper cable curls along the other
+        // for several widths.
         for crossing_rad in [0.7, 0.9, 1.1] {
             for steep_rad in [-0.9, -1.1, -1.3] {
                 for steep_radius_px in [90.0, 110.0, 150.0] {

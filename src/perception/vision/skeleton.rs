@@ -11,7 +11,8 @@
 //! thin into two 3-way junctions rather than one 4-way one. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least, each branch's direction followed back along its curve into the
-//! junction: a cable goes on through a crossing as it bends. Walking edges and
+//! junction: a cable goes on through a crossing as it bends, and its path is
+//! bridged across the crossing by a cubic Hermite curve. Walking edges and
 //! pairings from end to end gives one pixel path per cable; a path that
 //! turns sharply is two cables and is cut there. `paths.rs` then finishes
 //! the paths as it does the superpixel method's.
@@ -39,9 +40,10 @@ const MERGE_WIDTHS: f64 = 2.5;
 /// of the paths through it.
 const JUNCTION_TRIM_WIDTHS: f64 = 1.0;
 /// Junctions up to this many cable widths apart may still be one crossing
-/// (two cables crossing at 10° overlap for about six widths), when their
-/// shape says so (see `Graph::merge_junctions`).
-const SPLIT_CROSSING_WIDTHS: f64 = 8.0;
+/// (two cables crossing at 10° overlap for about six widths; 10 px cables
+/// bending opposite ways through 29° left junctions 8.6 widths apart), when
+/// their shape says so (see `Graph::merge_junctions`).
+const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
 /// How straight both outer branches of a split crossing's junction must run
 /// on into the edge between the junctions. That edge runs between the two
 /// cables, so a cable that bends through the crossing leaves it at up to
@@ -98,6 +100,15 @@ impl Grid {
             (i % self.stride) as f64 - 1.0,
             (i / self.stride) as f64 - 1.0,
         ]
+    }
+
+    /// The padded index of the pixel nearest `p`, if it is in the image.
+    fn index_of(&self, p: [f64; 2]) -> Option<usize> {
+        let rows = self.on.len() / self.stride - 2;
+        let (x, y) = (p[0].round(), p[1].round());
+        let inside =
+            (0.0..(self.stride - 2) as f64).contains(&x) && (0.0..rows as f64).contains(&y);
+        inside.then(|| (y as usize + 1) * self.stride + x as usize + 1)
     }
 
     /// The 8 neighbours' states, clockwise from north.
@@ -466,6 +477,17 @@ impl Graph {
             .collect()
     }
 
+    /// The bend of joining each two of `branches` at a junction at `centre`.
+    fn bend_costs(&self, branches: &[Branch], centre: [f64; 2], width_px: f64) -> Vec<Vec<f64>> {
+        let dirs: Vec<[f64; 2]> = branches
+            .iter()
+            .map(|&b| self.branch_tangent(b, centre, width_px))
+            .collect();
+        dirs.iter()
+            .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
+            .collect()
+    }
+
     /// Pixels of a branch going out of its junction.
     fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
         let px = &self.edges[e].pixels;
@@ -541,6 +563,43 @@ fn direction_stretch(width_px: f64) -> (usize, usize) {
     let skip = (0.75 * width_px).round() as usize;
     let span = (2.0 * width_px).max(8.0).round() as usize;
     (skip, span)
+}
+
+/// Points about a pixel apart across the gap from the end of `before` to
+/// the start of `after`, on the cubic Hermite curve that leaves `before`
+/// and enters `after` along their directions over their last and first
+/// `span` points: a cable bends through a crossing, where the skeleton
+/// says nothing of it. Empty when either run is too short to have a
+/// direction.
+fn bridge(before: &[[f64; 2]], after: &[[f64; 2]], span: usize) -> Vec<[f64; 2]> {
+    let (Some(&p0), Some(&p1)) = (before.last(), after.first()) else {
+        return Vec::new();
+    };
+    let back = before[before.len().saturating_sub(span + 1)];
+    let ahead = after[span.min(after.len() - 1)];
+    let unit = |a: [f64; 2], b: [f64; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let n = dx.hypot(dy);
+        (n > 0.0).then(|| [dx / n, dy / n])
+    };
+    let (Some(m0), Some(m1)) = (unit(back, p0), unit(p1, ahead)) else {
+        return Vec::new();
+    };
+    let gap_px = (p1[0] - p0[0]).hypot(p1[1] - p0[1]);
+    let n = gap_px.ceil() as usize;
+    (1..n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            let (t2, t3) = (t * t, t * t * t);
+            let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+            let h10 = t3 - 2.0 * t2 + t;
+            let h01 = -2.0 * t3 + 3.0 * t2;
+            let h11 = t3 - t2;
+            std::array::from_fn(|k| {
+                h00 * p0[k] + h10 * gap_px * m0[k] + h01 * p1[k] + h11 * gap_px * m1[k]
+            })
+        })
+        .collect()
 }
 
 /// Bending, in radians, of going in along `a` (pointing out of the
@@ -649,6 +708,7 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     let mut grid = Grid::from_mask(mask)?;
     let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
     let area = fg.len() as f64;
+    let mask_on = grid.on.clone();
     grid.thin(&mut fg);
     grid.remove_redundant(&mut fg);
     let width_px = if fg.is_empty() {
@@ -682,15 +742,7 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
         let pairs = if list.len() == 2 {
             vec![(0, 1)]
         } else {
-            let dirs: Vec<[f64; 2]> = list
-                .iter()
-                .map(|&b| graph.branch_tangent(b, centre, width_px))
-                .collect();
-            let cost: Vec<Vec<f64>> = dirs
-                .iter()
-                .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
-                .collect();
-            best_pairing(&cost)
+            best_pairing(&graph.bend_costs(list, centre, width_px))
         };
         for (a, b) in pairs {
             partner.insert(list[a], list[b]);
@@ -703,9 +755,11 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     let mut used = vec![false; graph.edges.len()];
     let mut paths = Vec::new();
     // Skeleton pixels within about a width of a crossing lean towards the
-    // other cable: a path through a crossing leaves them out and the spline
-    // bridges the gap.
+    // other cable: a path through a crossing leaves them out, and out the
+    // skeleton between a split crossing's junctions, and bridges the gap
+    // with a curve that keeps to the cable's direction either side.
     let trim = (JUNCTION_TRIM_WIDTHS * width_px).round() as usize;
+    let span = direction_stretch(width_px).1;
     let walk = |start: Branch, used: &mut Vec<bool>| -> Vec<[f64; 2]> {
         let mut pts = Vec::new();
         let mut cur = start;
@@ -717,11 +771,22 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
             let next = partner.get(&far).copied().filter(|next| !used[next.0]);
             let head = if entered_crossing { trim } else { 0 };
             let tail = if next.is_some() { trim } else { 0 };
-            if edge_pts.len() > 2 * (head + tail) {
-                pts.extend_from_slice(&edge_pts[head..edge_pts.len() - tail]);
+            let own = if edge_pts.len() > 2 * (head + tail) {
+                &edge_pts[head..edge_pts.len() - tail]
             } else {
-                pts.extend(edge_pts);
+                &edge_pts[..]
+            };
+            if entered_crossing {
+                let across = bridge(&pts, own, span);
+                // One that leaves the mask joins what are no one cable.
+                if across
+                    .iter()
+                    .all(|&p| graph.grid.index_of(p).is_some_and(|i| mask_on[i] != 0))
+                {
+                    pts.extend(across);
+                }
             }
+            pts.extend_from_slice(own);
             match next {
                 Some(next) => {
                     cur = next;
@@ -776,6 +841,35 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
 mod tests {
     use super::*;
     use crate::sim::render::fixtures::segment_px;
+
+    #[test]
+    fn a_bridge_across_a_gap_keeps_to_the_arc_either_side() {
+        // Two runs of a circle of 100 px radius, a pixel apart, with 0.4 rad
+        // (40 px) of it missing between them.
+        let arc = |from_rad: f64, to_rad: f64| -> Vec<[f64; 2]> {
+            let n = ((to_rad - from_rad) * 100.0).round() as usize;
+            (0..=n)
+                .map(|i| {
+                    let a = from_rad + (to_rad - from_rad) * i as f64 / n as f64;
+                    [300.0 + 100.0 * a.cos(), 200.0 + 100.0 * a.sin()]
+                })
+                .collect()
+        };
+        let (before, after) = (arc(0.0, 0.3), arc(0.7, 1.0));
+        let across = bridge(&before, &after, 16);
+        assert_eq!(across.len(), 39);
+        // Each run's direction is its chord over 16 px, 0.08 rad off the
+        // tangent at its end: the bridge swings out by about half a pixel.
+        for p in &across {
+            let off_px = ((p[0] - 300.0).hypot(p[1] - 200.0) - 100.0).abs();
+            assert!(off_px < 1.0, "{p:?} is {off_px:.2} px off the arc");
+        }
+        // The points go from one run to the other, a pixel apart.
+        let mut all = before.clone();
+        all.extend(&across);
+        all.extend(&after);
+        assert!(all.windows(2).all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1.1));
+    }
 
     #[test]
     fn two_cables_meeting_at_a_corner_are_cut_apart() {
