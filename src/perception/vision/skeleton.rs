@@ -868,7 +868,10 @@ mod tests {
         let mut all = before.clone();
         all.extend(&across);
         all.extend(&after);
-        assert!(all.windows(2).all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1.1));
+        assert!(
+            all.windows(2)
+                .all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1.1)
+        );
     }
 
     #[test]
