@@ -66,6 +66,13 @@ pub(super) fn polyline_length(points: &[[f64; 2]]) -> f64 {
         .sum()
 }
 
+/// The unit vector from `a` to `b`, if they differ.
+pub(super) fn unit(a: [f64; 2], b: [f64; 2]) -> Option<[f64; 2]> {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let n = dx.hypot(dy);
+    (n > 0.0).then(|| [dx / n, dy / n])
+}
+
 /// The angle between two directions (not necessarily unit).
 pub(super) fn angle_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
     let norms = a[0].hypot(a[1]) * b[0].hypot(b[1]);

@@ -24,7 +24,7 @@ use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::paths::{FoundPaths, angle_rad, finish_paths, polyline_length, tangent_span_px};
+use super::paths::{FoundPaths, angle_rad, finish_paths, polyline_length, tangent_span_px, unit};
 use super::spline::arc_lengths_px;
 
 /// Spurs shorter than this many cable widths (plus [`SPUR_EXTRA_PX`]) are
@@ -547,13 +547,7 @@ fn direction_leaving(pts: &[[f64; 2]], centre: [f64; 2], width_px: f64) -> [f64;
     } else {
         (centre, pts[last])
     };
-    let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
-    let norm = dx.hypot(dy);
-    if norm > 0.0 {
-        [dx / norm, dy / norm]
-    } else {
-        [0.0, 0.0]
-    }
+    unit(from, to).unwrap_or([0.0, 0.0])
 }
 
 /// Where a branch's direction is measured, in pixels along it from its
@@ -577,11 +571,6 @@ fn bridge(before: &[[f64; 2]], after: &[[f64; 2]], span: usize) -> Vec<[f64; 2]>
     };
     let back = before[before.len().saturating_sub(span + 1)];
     let ahead = after[span.min(after.len() - 1)];
-    let unit = |a: [f64; 2], b: [f64; 2]| {
-        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-        let n = dx.hypot(dy);
-        (n > 0.0).then(|| [dx / n, dy / n])
-    };
     let (Some(m0), Some(m1)) = (unit(back, p0), unit(p1, ahead)) else {
         return Vec::new();
     };

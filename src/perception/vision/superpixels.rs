@@ -17,7 +17,7 @@ use opencv::ximgproc::{self, SuperpixelSLICTrait, SuperpixelSLICTraitConst};
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::paths::{FoundPaths, finish_paths};
+use super::paths::{FoundPaths, finish_paths, unit};
 
 /// Superpixel side, in cable widths, unless set otherwise: about two, so
 /// that a cable is one superpixel across and each node has a clear
@@ -162,12 +162,6 @@ fn graph(image: &Mat, mask: &Mat, region_px: i32) -> Result<Nodes, VisionError> 
         centres_px,
         neighbours,
     })
-}
-
-fn unit(a: [f64; 2], b: [f64; 2]) -> Option<[f64; 2]> {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let n = dx.hypot(dy);
-    (n > 0.0).then(|| [dx / n, dy / n])
 }
 
 /// The walk from end node `start`: each step to the unvisited neighbour
