@@ -305,3 +305,60 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{printed}"
     );
 }
+
+#[test]
+fn eval_vision_names_the_cables_that_each_side_lacks() {
+    // The image shows cables A and B; its labels give A and C, a cable
+    // that runs out of the image at the top and is not there.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let a = cable([80.0, 300.0], [560.0, 420.0]);
+    let b = cable([150.0, 250.0], [450.0, 100.0]);
+    let c = cable([500.0, 0.0], [600.0, 200.0]);
+    write_scene(dir.path(), "00000", vec![a.clone(), c], true);
+    write_scene(dir.path(), "00000", vec![a, b], false);
+    let args = [
+        "eval-vision",
+        text(dir.path()),
+        "--straight-edge-radius-px",
+        "0",
+    ];
+    let out = cablecell(&[&args[..], &["--json"]].concat());
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let score = &e["per_image"][0][1];
+    assert_eq!(score["count_right"], true, "{e}");
+    let missed = score["missed"].as_array().expect("missed");
+    assert_eq!(missed.len(), 1, "{e}");
+    assert_eq!(missed[0]["index"], 1, "{e}");
+    assert_eq!(missed[0]["at_border"], true, "{e}");
+    // C is 224 px long.
+    let c_px = missed[0]["length_px"].as_f64().expect("length");
+    assert!((215.0..=230.0).contains(&c_px), "{e}");
+    let unlabelled = score["unlabelled"].as_array().expect("unlabelled");
+    assert_eq!(unlabelled.len(), 1, "{e}");
+    assert_eq!(unlabelled[0]["at_border"], false, "{e}");
+    // B is 335 px long; its detection a little shorter at the ends.
+    let b_px = unlabelled[0]["length_px"].as_f64().expect("length");
+    assert!((315.0..=340.0).contains(&b_px), "{e}");
+
+    let human = cablecell(&args);
+    let printed = String::from_utf8_lossy(&human.stdout);
+    let found = unlabelled[0]["index"].as_u64().expect("index");
+    assert!(
+        printed.contains(&format!(
+            "labelled, not found    1 of 2: 00000 #1 ({c_px:.0} px, at the border)"
+        )),
+        "{printed}"
+    );
+    assert!(
+        printed.contains(&format!(
+            "found, not labelled    1 of 2: 00000 #{found} ({b_px:.0} px)"
+        )),
+        "{printed}"
+    );
+}

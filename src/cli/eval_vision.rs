@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::MaskNetwork;
-use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
+use cablecell::perception::vision::eval::{
+    GroundTruth, ImageScore, Unmatched, label_consistency, score,
+};
 use cablecell::perception::vision::network::FLOAT_MODEL;
 use clap::Args;
 use opencv::core::Mat;
@@ -467,6 +469,18 @@ fn print_evaluation(dir: &Path, report: &Report) {
     if !miscounted.is_empty() {
         println!("  {:<22} {}", "count wrong in", miscounted.join(", "));
     }
+    print_unmatched(
+        "labelled, not found",
+        e.per_image
+            .iter()
+            .map(|(stem, s)| (stem, s.truth_count, &s.missed)),
+    );
+    print_unmatched(
+        "found, not labelled",
+        e.per_image
+            .iter()
+            .map(|(stem, s)| (stem, s.predicted_count, &s.unlabelled)),
+    );
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);
     for (stage, s) in &e.stage_ms {
@@ -479,6 +493,35 @@ fn print_evaluation(dir: &Path, report: &Report) {
     }
     for (stem, note) in &e.notes {
         println!("  note: {stem}: {note}");
+    }
+}
+
+/// One line listing the cables of one side that none of the other side
+/// matches, from (image, cables on that side, unmatched ones) per image:
+/// "3 of 83: 00034 #7 (52 px, at the border), ...".
+fn print_unmatched<'a>(
+    what: &str,
+    per_image: impl Iterator<Item = (&'a String, usize, &'a Vec<Unmatched>)>,
+) {
+    let (mut total, mut listed) = (0, Vec::new());
+    for (stem, count, unmatched) in per_image {
+        total += count;
+        listed.extend(unmatched.iter().map(|u| {
+            let length = u
+                .length_px
+                .map_or("no line".to_string(), |l| format!("{l:.0} px"));
+            let border = if u.at_border { ", at the border" } else { "" };
+            format!("{stem} #{} ({length}{border})", u.index)
+        }));
+    }
+    if total > 0 {
+        let of = format!("{} of {total}", listed.len());
+        let list = if listed.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", listed.join(", "))
+        };
+        println!("  {what:<22} {of}{list}");
     }
 }
 

@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 
 use opencv::core::{self, Mat, Size};
-use opencv::imgcodecs;
 use opencv::prelude::*;
+use opencv::{imgcodecs, imgproc};
 
 use super::error::{VisionError, cv};
 use super::paths::polyline_length;
@@ -260,6 +260,46 @@ pub struct ImageScore {
     /// Mean distance from each predicted grasp point to the nearest true
     /// centreline; `None` when nothing was predicted.
     pub grasp_error_px: Option<f64>,
+    /// Labelled cables that no instance matches (instance DICE at least
+    /// [`MATCH_MIN_DICE`]): why a count came out low.
+    pub missed: Vec<Unmatched>,
+    /// Instances that match no labelled cable: why a count came out high.
+    pub unlabelled: Vec<Unmatched>,
+}
+
+/// The instance DICE at which a found cable and a labelled one are the
+/// same cable. Labels 2–3 px off their wires still reach 0.5–0.8 in
+/// cables-dev; neighbours that only touch stay far below.
+pub const MATCH_MIN_DICE: f64 = 0.15;
+
+/// How near the image border (px) a cable's mask must reach for the cable
+/// to run out of view.
+const AT_BORDER_PX: i32 = 10;
+
+/// A cable on one side of the comparison that none on the other matches.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Unmatched {
+    /// The labelled cable's number (`NNNNN_mask_K.png`, line K + 1 of
+    /// `NNNNN.txt`) or the found one's (in the pipeline's order).
+    pub index: usize,
+    /// Along its centre line (a found cable's spline); `None` for a
+    /// labelled mask without a line.
+    pub length_px: Option<f64>,
+    /// Its mask reaches within [`AT_BORDER_PX`] of the image border: the
+    /// cable runs out of view.
+    pub at_border: bool,
+}
+
+/// Whether `mask`'s pixels reach within [`AT_BORDER_PX`] of its border.
+fn reaches_border(mask: &Mat) -> bool {
+    let Ok(r) = imgproc::bounding_rect(mask) else {
+        return false;
+    };
+    r.width > 0
+        && (r.x < AT_BORDER_PX
+            || r.y < AT_BORDER_PX
+            || r.x + r.width > mask.cols() - AT_BORDER_PX
+            || r.y + r.height > mask.rows() - AT_BORDER_PX)
 }
 
 fn count(m: &Mat) -> f64 {
@@ -342,14 +382,34 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
     pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut truth_used = vec![false; truth.masks.len()];
     let mut pred_used = vec![false; cables.len()];
+    let mut truth_found = vec![false; truth.masks.len()];
+    let mut pred_labelled = vec![false; cables.len()];
     let mut matched = 0.0;
     for (d, t, p) in pairs {
         if !truth_used[t] && !pred_used[p] {
             truth_used[t] = true;
             pred_used[p] = true;
             matched += d;
+            truth_found[t] = d >= MATCH_MIN_DICE;
+            pred_labelled[p] = d >= MATCH_MIN_DICE;
         }
     }
+    let missed = (0..truth.masks.len())
+        .filter(|&t| !truth_found[t])
+        .map(|t| Unmatched {
+            index: t,
+            length_px: truth.polylines_px.get(t).map(|line| polyline_length(line)),
+            at_border: reaches_border(&truth.masks[t]),
+        })
+        .collect();
+    let unlabelled = (0..cables.len())
+        .filter(|&p| !pred_labelled[p])
+        .map(|p| Unmatched {
+            index: p,
+            length_px: Some(polyline_length(&cables[p].samples_px)),
+            at_border: reaches_border(&cables[p].mask),
+        })
+        .collect();
     let truth_count = truth.masks.len();
     let instance_dice = if truth_count > 0 {
         matched / truth_count as f64
@@ -378,6 +438,8 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         truth_count,
         centerline_px,
         grasp_error_px,
+        missed,
+        unlabelled,
     }
 }
 
