@@ -198,8 +198,13 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         .map(|p| p[0].as_str().expect("stem"))
         .collect();
     assert_eq!(stems, ["00001", "00002"]);
-    // Exact ground truth and plain backgrounds: the classical mask matches.
+    // Exact ground truth and plain backgrounds: the classical mask matches,
+    // and each labelled cable is one found.
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
+    let found = e["per_image"][0][1]["predicted_count"].clone();
+    assert_eq!(e["per_image"][0][1]["truth_count"], found, "{e}");
+    assert_eq!(e["labels_found"]["rate"], 1.0, "{e}");
+    assert_eq!(e["found_labelled"]["rate"], 1.0, "{e}");
 
     let none = cablecell(&["eval-vision", text(&out), "--from", "00005"]);
     assert_eq!(none.status.code(), Some(2));
@@ -240,6 +245,8 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
     assert!(settings[8].starts_with("labels' own centre lines"));
     assert!(dice(8) > 0.9, "{rows}");
     assert!(rows[8]["total_ms_median"].is_null(), "{rows}");
+    assert!(rows[8]["labels_found"].is_null(), "{rows}");
+    assert_eq!(rows[0]["labels_found"], 1.0, "{rows}");
     let no_rounds = cablecell(&["eval-vision", text(&out), "--sweep", "--rounds", "0"]);
     assert_eq!(no_rounds.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&no_rounds.stderr).contains("--rounds"));

@@ -50,6 +50,10 @@ struct Evaluation {
     union_dice: Option<Summary>,
     instance_dice: Option<Summary>,
     count_right: Option<Rate>,
+    /// Labelled cables that a detection matches, over all images.
+    labels_found: Option<Rate>,
+    /// Detections that match a labelled cable, over all images.
+    found_labelled: Option<Rate>,
     centerline_px: Option<Summary>,
     grasp_error_px: Option<Summary>,
     /// Per stage, and "total": median and 95th percentile among the rest.
@@ -252,6 +256,8 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
             per_image.iter().filter(|(_, s)| s.count_right).count(),
             per_image.len(),
         ),
+        labels_found: matched_rate(&per_image, |s| (s.truth_count, s.missed.len())),
+        found_labelled: matched_rate(&per_image, |s| (s.predicted_count, s.unlabelled.len())),
         centerline_px: of(&|s| s.centerline_px),
         grasp_error_px: of(&|s| s.grasp_error_px),
         stage_ms: stage_ms
@@ -264,6 +270,19 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
     })
 }
 
+/// The share of one side's cables that the other side matches, from
+/// (cables on that side, unmatched ones) per image.
+fn matched_rate(
+    per_image: &[(String, ImageScore)],
+    side: impl Fn(&ImageScore) -> (usize, usize),
+) -> Option<Rate> {
+    let (all, unmatched) = per_image
+        .iter()
+        .map(|(_, s)| side(s))
+        .fold((0, 0), |(a, u), (n, m)| (a + n, u + m));
+    Rate::wilson(all - unmatched, all)
+}
+
 /// One row of the sweep: what it changes and what it scored.
 #[derive(Serialize)]
 struct SweepRow {
@@ -272,6 +291,8 @@ struct SweepRow {
     total_ms_p95: Option<f64>,
     union_dice: Option<f64>,
     count_right: Option<f64>,
+    labels_found: Option<f64>,
+    found_labelled: Option<f64>,
     grasp_error_px_mean: Option<f64>,
     grasp_error_px_median: Option<f64>,
     centerline_px: Option<f64>,
@@ -361,6 +382,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             total_ms_p95: total.as_ref().map(|s| s.p95),
             union_dice: evaluation.union_dice.map(|s| s.mean),
             count_right: evaluation.count_right.map(|r| r.rate),
+            labels_found: evaluation.labels_found.map(|r| r.rate),
+            found_labelled: evaluation.found_labelled.map(|r| r.rate),
             grasp_error_px_mean: evaluation.grasp_error_px.as_ref().map(|s| s.mean),
             grasp_error_px_median: evaluation.grasp_error_px.as_ref().map(|s| s.median),
             centerline_px: evaluation.centerline_px.map(|s| s.mean),
@@ -377,6 +400,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             total_ms_p95: None,
             union_dice: Some(labels.union_dice.mean),
             count_right: None,
+            labels_found: None,
+            found_labelled: None,
             grasp_error_px_mean: None,
             grasp_error_px_median: None,
             centerline_px: None,
@@ -397,20 +422,22 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
         args.rounds
     );
     println!(
-        "| setting | median ms | p95 ms | union DICE | count right | grasp px mean | grasp px median | centre line px |"
+        "| setting | median ms | p95 ms | union DICE | count right | labels found | found labelled | grasp px mean | grasp px median | centre line px |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let cell =
         |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
+    let percent = |v: Option<f64>| v.map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r));
     for row in &rows {
         println!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             row.setting,
             cell(row.total_ms_median, 1),
             cell(row.total_ms_p95, 1),
             cell(row.union_dice, 3),
-            row.count_right
-                .map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r)),
+            percent(row.count_right),
+            percent(row.labels_found),
+            percent(row.found_labelled),
             cell(row.grasp_error_px_mean, 1),
             cell(row.grasp_error_px_median, 1),
             cell(row.centerline_px, 1),
