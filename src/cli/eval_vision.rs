@@ -64,7 +64,7 @@ struct Evaluation {
     total_ms: Vec<f64>,
     per_image: Vec<(String, ImageScore)>,
     /// What the pipeline said about an image (fallbacks taken, detections
-    /// dropped as edges), by image.
+    /// dropped as edges or as cables too little in view), by image.
     notes: Vec<(String, String)>,
 }
 

@@ -138,7 +138,7 @@ pub struct VisionOutput {
     /// "spline", "instance_masks".
     pub timings_ms: Vec<(&'static str, f64)>,
     /// What a user should know about this run (fallbacks taken,
-    /// detections dropped as edges).
+    /// detections dropped as edges or as cables too little in view).
     pub notes: Vec<String>,
 }
 
@@ -151,6 +151,9 @@ pub struct MaskInstances {
     /// Paths dropped as straight edges (see
     /// [`VisionConfig::straight_edge_radius_px`]).
     pub straight_dropped: usize,
+    /// Paths dropped as running out of view too short (see
+    /// [`VisionConfig::min_border_cable_length_px`]).
+    pub border_dropped: usize,
     /// Milliseconds for "instances", "spline", "instance_masks".
     pub timings_ms: Vec<(&'static str, f64)>,
 }
@@ -263,6 +266,12 @@ impl Pipeline {
                 found.straight_dropped, self.config.straight_edge_radius_px
             ));
         }
+        if found.border_dropped > 0 {
+            notes.push(format!(
+                "dropped {} cable(s) that run out of view shorter than {:.0} px: too little of them is in view to grasp (a minimum border length of 0 keeps them)",
+                found.border_dropped, self.config.min_border_cable_length_px
+            ));
+        }
         let mut union_mask = mask::zeros_u8(full.height, full.width)?;
         for cable in &found.cables {
             let mut next = Mat::default();
@@ -335,6 +344,7 @@ impl Pipeline {
                     || !ends.into_iter().flatten().any(at_border)
             })
             .collect();
+        let border_dropped = found.paths.len() - paths.len();
         timings_ms.push(("instances", ms_since(start)));
 
         let start = Instant::now();
@@ -384,6 +394,7 @@ impl Pipeline {
             cables,
             cable_width_px: found.width_px,
             straight_dropped,
+            border_dropped,
             timings_ms,
         })
     }
@@ -918,7 +929,9 @@ mod tests {
             min_border_cable_length_px: 0.0,
             ..keep_straight()
         };
-        assert_eq!(detect(&scene.bgr, keep_all).cables.len(), 2);
+        let all = detect(&scene.bgr, keep_all);
+        assert_eq!(all.cables.len(), 2);
+        assert!(all.notes.is_empty(), "{:?}", all.notes);
         let out = detect(
             &scene.bgr,
             VisionConfig {
@@ -927,6 +940,13 @@ mod tests {
             },
         );
         assert_each_followed(&out, std::slice::from_ref(&loose), 2.5);
+        // And says so.
+        assert_eq!(
+            out.notes,
+            [
+                "dropped 1 cable(s) that run out of view shorter than 80 px: too little of them is in view to grasp (a minimum border length of 0 keeps them)"
+            ]
+        );
     }
 
     #[test]
