@@ -7,13 +7,11 @@ use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
 use cablecell::task::cell_file::{CellFile, DetectorBackend, FrameConfig};
 use cablecell::task::load::load_cell_uncalibrated;
-use opencv::core::{Mat, Point, Scalar, Vector};
-use opencv::imgcodecs;
-use opencv::imgproc;
+use opencv::core::Mat;
 use serde::Serialize;
 
 use super::Status;
-use super::vision_io::{VisionArgs, read_image};
+use super::vision_io::{VisionArgs, create_dir, draw_overlay, read_image, write_png};
 
 /// What `detect --json` prints per image.
 #[derive(Serialize)]
@@ -221,75 +219,3 @@ fn write_outputs(
     Ok(())
 }
 
-fn create_dir(dir: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| format!("{}: cannot create the folder: {e}", dir.display()))
-}
-
-fn write_png(path: &Path, image: &Mat) -> Result<(), String> {
-    let name = path.display().to_string();
-    match imgcodecs::imwrite(&name, image, &Vector::new()) {
-        Ok(true) => Ok(()),
-        Ok(false) => Err(format!("{name}: OpenCV could not write the image")),
-        Err(e) => Err(format!("{name}: {e}")),
-    }
-}
-
-/// The image with each cable's spline, grasp point and grasp frame's x
-/// axis drawn on it.
-fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
-    const COLOURS: [(f64, f64, f64); 6] = [
-        (0.0, 255.0, 255.0),
-        (255.0, 0.0, 255.0),
-        (255.0, 255.0, 0.0),
-        (0.0, 128.0, 255.0),
-        (255.0, 128.0, 0.0),
-        (128.0, 255.0, 0.0),
-    ];
-    let mut drawn = image.clone();
-    for (k, cable) in output.cables.iter().enumerate() {
-        let (b, g, r) = COLOURS[k % COLOURS.len()];
-        let colour = Scalar::new(b, g, r, 0.0);
-        let points: Vector<Point> = cable
-            .samples_px
-            .iter()
-            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
-            .collect();
-        let mut curves = Vector::<Vector<Point>>::new();
-        curves.push(points);
-        imgproc::polylines(&mut drawn, &curves, false, colour, 2, imgproc::LINE_AA, 0)?;
-        let grasp = Point::new(
-            cable.grasp_px[0].round() as i32,
-            cable.grasp_px[1].round() as i32,
-        );
-        imgproc::circle(&mut drawn, grasp, 5, colour, -1, imgproc::LINE_AA, 0)?;
-        let (dx, dy) = (
-            cable.direction_rad.cos() * 40.0,
-            cable.direction_rad.sin() * 40.0,
-        );
-        let tip = Point::new(grasp.x + dx.round() as i32, grasp.y + dy.round() as i32);
-        imgproc::arrowed_line(
-            &mut drawn,
-            grasp,
-            tip,
-            Scalar::new(0.0, 0.0, 255.0, 0.0),
-            2,
-            imgproc::LINE_AA,
-            0,
-            0.25,
-        )?;
-        // The frame's y axis: normal to the cable in the image plane.
-        let normal = Point::new(grasp.x - dy.round() as i32, grasp.y + dx.round() as i32);
-        imgproc::arrowed_line(
-            &mut drawn,
-            grasp,
-            normal,
-            Scalar::new(0.0, 255.0, 0.0, 0.0),
-            2,
-            imgproc::LINE_AA,
-            0,
-            0.25,
-        )?;
-    }
-    Ok(drawn)
-}

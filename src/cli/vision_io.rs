@@ -1,6 +1,6 @@
 //! What `detect` and `eval-vision` share: the pipeline's configuration
 //! from the command line, the network loaded only when a scene needs it,
-//! and reading images.
+//! reading images, and writing them with the cables found drawn on them.
 
 use std::path::{Path, PathBuf};
 
@@ -9,11 +9,13 @@ use cablecell::perception::vision::network::{
     runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
-use cablecell::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
+use cablecell::perception::vision::{
+    InstanceMethod, MaskMethod, Pipeline, VisionConfig, VisionOutput,
+};
 use clap::Args;
-use opencv::core::Mat;
-use opencv::imgcodecs;
+use opencv::core::{Mat, Point, Scalar, Vector};
 use opencv::prelude::*;
+use opencv::{imgcodecs, imgproc};
 
 #[derive(Args, Debug, Clone)]
 pub struct VisionArgs {
@@ -148,4 +150,77 @@ pub fn read_image(path: &Path) -> Result<Mat, String> {
         return Err(format!("{name}: not an image OpenCV can decode"));
     }
     Ok(image)
+}
+
+pub fn create_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("{}: cannot create the folder: {e}", dir.display()))
+}
+
+pub fn write_png(path: &Path, image: &Mat) -> Result<(), String> {
+    let name = path.display().to_string();
+    match imgcodecs::imwrite(&name, image, &Vector::new()) {
+        Ok(true) => Ok(()),
+        Ok(false) => Err(format!("{name}: OpenCV could not write the image")),
+        Err(e) => Err(format!("{name}: {e}")),
+    }
+}
+
+/// The image with each cable's spline, grasp point and grasp frame's x
+/// axis drawn on it.
+pub fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
+    const COLOURS: [(f64, f64, f64); 6] = [
+        (0.0, 255.0, 255.0),
+        (255.0, 0.0, 255.0),
+        (255.0, 255.0, 0.0),
+        (0.0, 128.0, 255.0),
+        (255.0, 128.0, 0.0),
+        (128.0, 255.0, 0.0),
+    ];
+    let mut drawn = image.clone();
+    for (k, cable) in output.cables.iter().enumerate() {
+        let (b, g, r) = COLOURS[k % COLOURS.len()];
+        let colour = Scalar::new(b, g, r, 0.0);
+        let points: Vector<Point> = cable
+            .samples_px
+            .iter()
+            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+            .collect();
+        let mut curves = Vector::<Vector<Point>>::new();
+        curves.push(points);
+        imgproc::polylines(&mut drawn, &curves, false, colour, 2, imgproc::LINE_AA, 0)?;
+        let grasp = Point::new(
+            cable.grasp_px[0].round() as i32,
+            cable.grasp_px[1].round() as i32,
+        );
+        imgproc::circle(&mut drawn, grasp, 5, colour, -1, imgproc::LINE_AA, 0)?;
+        let (dx, dy) = (
+            cable.direction_rad.cos() * 40.0,
+            cable.direction_rad.sin() * 40.0,
+        );
+        let tip = Point::new(grasp.x + dx.round() as i32, grasp.y + dy.round() as i32);
+        imgproc::arrowed_line(
+            &mut drawn,
+            grasp,
+            tip,
+            Scalar::new(0.0, 0.0, 255.0, 0.0),
+            2,
+            imgproc::LINE_AA,
+            0,
+            0.25,
+        )?;
+        // The frame's y axis: normal to the cable in the image plane.
+        let normal = Point::new(grasp.x - dy.round() as i32, grasp.y + dx.round() as i32);
+        imgproc::arrowed_line(
+            &mut drawn,
+            grasp,
+            normal,
+            Scalar::new(0.0, 255.0, 0.0, 0.0),
+            2,
+            imgproc::LINE_AA,
+            0,
+            0.25,
+        )?;
+    }
+    Ok(drawn)
 }
