@@ -346,7 +346,8 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
     let b_px = unlabelled[0]["length_px"].as_f64().expect("length");
     assert!((315.0..=340.0).contains(&b_px), "{e}");
 
-    let human = cablecell(&args);
+    let overlay = dir.path().join("overlay");
+    let human = cablecell(&[&args[..], &["--overlay", text(&overlay)]].concat());
     let printed = String::from_utf8_lossy(&human.stdout);
     let found = unlabelled[0]["index"].as_u64().expect("index");
     assert!(
@@ -361,4 +362,14 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
         )),
         "{printed}"
     );
+    // The overlay draws the labelled centre lines in white, and the one
+    // not found thick in red: A's and C's midpoints.
+    let drawn = imgcodecs::imread(text(&overlay.join("00000.png")), imgcodecs::IMREAD_COLOR)
+        .expect("overlay");
+    assert_eq!((drawn.cols(), drawn.rows()), (640, 480));
+    let bgr = |x: i32, y: i32| *drawn.at_2d::<opencv::core::Vec3b>(y, x).expect("pixel");
+    let on_a = bgr(320, 360);
+    assert!(on_a.iter().all(|&v| v > 200), "{on_a:?}");
+    let on_c = bgr(550, 100);
+    assert!(on_c[2] > 200 && on_c[0] < 80 && on_c[1] < 80, "{on_c:?}");
 }

@@ -218,4 +218,3 @@ fn write_outputs(
     }
     Ok(())
 }
-

@@ -4,17 +4,21 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
-use cablecell::perception::vision::MaskNetwork;
 use cablecell::perception::vision::eval::{
     GroundTruth, ImageScore, Unmatched, label_consistency, score,
 };
 use cablecell::perception::vision::network::FLOAT_MODEL;
+use cablecell::perception::vision::{MaskNetwork, VisionOutput};
 use clap::Args;
-use opencv::core::Mat;
+use opencv::core::{Mat, Point, Scalar, Vector};
+use opencv::imgproc;
+use opencv::prelude::*;
 use serde::Serialize;
 
 use super::Status;
-use super::vision_io::{InstancesArg, MaskArg, VisionArgs, read_image};
+use super::vision_io::{
+    InstancesArg, MaskArg, VisionArgs, create_dir, draw_overlay, read_image, write_png,
+};
 
 #[derive(Args, Debug, Clone)]
 pub struct EvalVisionArgs {
@@ -39,6 +43,12 @@ pub struct EvalVisionArgs {
     /// every setting instead of loading it onto a few.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub rounds: u32,
+    /// Write each image, as DIR/NAME.png, with the cables found drawn on
+    /// it as `detect --overlay` draws them, the labelled centre lines in
+    /// white, and in red the labelled cables not found and the found ones
+    /// not labelled.
+    #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
+    pub overlay: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
 }
@@ -104,7 +114,7 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     if args.sweep {
         return sweep(args, &samples);
     }
-    let report = evaluate(&args.vision, &samples).and_then(|evaluation| {
+    let report = evaluate(&args.vision, &samples, args.overlay.as_deref()).and_then(|evaluation| {
         Ok(Report {
             evaluation,
             labels_own_union_dice: labels_own_dice(&samples)?,
@@ -206,10 +216,18 @@ fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<String>> {
     }
 }
 
-/// Runs the pipeline configured by `vision` on every sample and scores it.
-/// The first image is run once untimed before the loop, so that loading
-/// the network and first-use allocations are not counted as its time.
-fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, String> {
+/// Runs the pipeline configured by `vision` on every sample and scores it,
+/// drawing each result into `overlay` when given. The first image is run
+/// once untimed before the loop, so that loading the network and first-use
+/// allocations are not counted as its time.
+fn evaluate(
+    vision: &VisionArgs,
+    samples: &[Sample],
+    overlay: Option<&Path>,
+) -> Result<Evaluation, String> {
+    if let Some(dir) = overlay {
+        create_dir(dir)?;
+    }
     let mut pipeline = vision.pipeline();
     let mut network = vision.network();
     let mut per_image = Vec::new();
@@ -231,7 +249,13 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
             .entry("total")
             .or_default()
             .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
-        per_image.push((sample.stem.clone(), score(&output, &sample.truth)));
+        let image_score = score(&output, &sample.truth);
+        if let Some(dir) = overlay {
+            let drawn = draw_comparison(&sample.image, &output, &sample.truth, &image_score)
+                .map_err(|e| format!("cannot draw the overlay of {}: {e}", sample.stem))?;
+            write_png(&dir.join(format!("{}.png", sample.stem)), &drawn)?;
+        }
+        per_image.push((sample.stem.clone(), image_score));
         notes.extend(
             output
                 .notes
@@ -268,6 +292,66 @@ fn evaluate(vision: &VisionArgs, samples: &[Sample]) -> Result<Evaluation, Strin
         per_image,
         notes,
     })
+}
+
+/// `image` with the cables found drawn as `detect --overlay` draws them,
+/// the labelled centre lines in white over them, and in red, each with its
+/// number, the labelled cables that no detection matches (drawn thick) and
+/// the detections that match no label.
+fn draw_comparison(
+    image: &Mat,
+    output: &VisionOutput,
+    truth: &GroundTruth,
+    image_score: &ImageScore,
+) -> opencv::Result<Mat> {
+    let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
+    let to_points = |line: &[[f64; 2]]| -> Vector<Point> {
+        line.iter()
+            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+            .collect()
+    };
+    let label = |drawn: &mut Mat, text: &str, at: [f64; 2]| {
+        // Beside the point, kept inside the image.
+        let x = (at[0].round() as i32 + 8).clamp(0, (drawn.cols() - 150).max(0));
+        let y = (at[1].round() as i32 - 8).clamp(16, drawn.rows().max(16));
+        let at = Point::new(x, y);
+        imgproc::put_text(
+            drawn,
+            text,
+            at,
+            imgproc::FONT_HERSHEY_SIMPLEX,
+            0.6,
+            red,
+            2,
+            imgproc::LINE_AA,
+            false,
+        )
+    };
+    let mut drawn = draw_overlay(image, output)?;
+    for line in &truth.polylines_px {
+        let curves = Vector::<Vector<Point>>::from_iter([to_points(line)]);
+        let white = Scalar::all(255.0);
+        imgproc::polylines(&mut drawn, &curves, false, white, 1, imgproc::LINE_AA, 0)?;
+    }
+    for missed in &image_score.missed {
+        let Some(line) = truth.polylines_px.get(missed.index) else {
+            continue;
+        };
+        let curves = Vector::<Vector<Point>>::from_iter([to_points(line)]);
+        imgproc::polylines(&mut drawn, &curves, false, red, 3, imgproc::LINE_AA, 0)?;
+        if let Some(&middle) = line.get(line.len() / 2) {
+            label(&mut drawn, &format!("#{} not found", missed.index), middle)?;
+        }
+    }
+    for unlabelled in &image_score.unlabelled {
+        let cable = &output.cables[unlabelled.index];
+        label(
+            &mut drawn,
+            &format!("#{} not labelled", unlabelled.index),
+            cable.grasp_px,
+        )?;
+    }
+    Ok(drawn)
 }
 
 /// The share of one side's cables that the other side matches, from
@@ -359,7 +443,7 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     let mut evaluations: Vec<Evaluation> = Vec::with_capacity(settings.len());
     for round in 0..args.rounds {
         for (k, (setting, vision)) in settings.iter().enumerate() {
-            let evaluation = match evaluate(vision, samples) {
+            let evaluation = match evaluate(vision, samples, None) {
                 Ok(evaluation) => evaluation,
                 Err(message) => {
                     eprintln!("error: {setting}: {message}");
