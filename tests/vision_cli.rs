@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{cablecell, text};
+use common::{cablecell, json_of, text};
 
 use cablecell::sim::render::fixtures::{draw_scene, matte_cable, segment_px};
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
@@ -51,7 +51,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     );
     let (masks, overlay) = (dir.path().join("masks"), dir.path().join("overlay"));
     // The drawn cable is ruler-straight: kept only when asked.
-    let out = cablecell(&[
+    let reports = json_of(&[
         "detect",
         text(&image),
         "--json",
@@ -62,13 +62,6 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         "--straight-edge-radius-px",
         "0",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     let report = &reports[0];
     assert_eq!(report["mask_used"], "classical");
     assert_eq!(report["plain_background"], true);
@@ -256,20 +249,13 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         ],
         true,
     );
-    let out = cablecell(&[
+    let e = json_of(&[
         "eval-vision",
         text(dir.path()),
         "--json",
         "--straight-edge-radius-px",
         "0",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let e: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(e["images"], 2);
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
     assert_eq!(e["count_right"]["successes"], 2, "{e}");
@@ -322,14 +308,7 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
         "--straight-edge-radius-px",
         "0",
     ];
-    let out = cablecell(&[&args[..], &["--json"]].concat());
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let e: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let e = json_of(&[&args[..], &["--json"]].concat());
     let score = &e["per_image"][0][1];
     assert_eq!(score["count_right"], true, "{e}");
     let missed = score["missed"].as_array().expect("missed");

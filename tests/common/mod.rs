@@ -24,6 +24,18 @@ pub fn cablecell(args: &[&str]) -> Output {
         .expect("cablecell runs")
 }
 
+/// The JSON the binary prints when run with `args`, which must succeed.
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    let out = cablecell(args);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
 /// A path as the `&str` a command line takes.
 pub fn text(path: &Path) -> &str {
     path.to_str().expect("utf-8 path")
