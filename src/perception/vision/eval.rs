@@ -268,8 +268,9 @@ pub struct ImageScore {
 }
 
 /// The instance DICE at which a found cable and a labelled one are the
-/// same cable. Labels 2–3 px off their wires still reach 0.5–0.8 in
-/// cables-dev; neighbours that only touch stay far below.
+/// same cable. In cables-dev, labels that lie a few pixels off their wires
+/// score as low as 0.2 against the wire found; a cable crossing another
+/// shares only the crossing with it.
 pub const MATCH_MIN_DICE: f64 = 0.15;
 
 /// How near the image border (px) a cable's mask must reach for the cable
