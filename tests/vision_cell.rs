@@ -16,6 +16,7 @@ use nalgebra::Vector3;
 use opencv::core::{Mat, Scalar};
 use opencv::imgcodecs;
 use opencv::prelude::*;
+use opencv::videoio;
 
 /// The text with the `[camera.calibration]` table (its comment, header and
 /// two keys) taken out.
@@ -223,6 +224,53 @@ fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
     match missing.capture() {
         Err(DeviceError::Unusable { reason, .. }) => {
             assert!(reason.contains("nowhere"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_video_camera_plays_its_frames_then_says_it_has_no_more() {
+    // Three frames, darker to lighter, as Motion JPEG.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("run.avi");
+    let fourcc = videoio::VideoWriter::fourcc('M', 'J', 'P', 'G').expect("fourcc");
+    let mut writer = videoio::VideoWriter::new(
+        path.to_str().expect("utf-8"),
+        fourcc,
+        10.0,
+        opencv::core::Size::new(64, 48),
+        true,
+    )
+    .expect("video writer");
+    assert!(writer.is_opened().expect("opened"), "no video writer");
+    for gray in [40.0, 120.0, 200.0] {
+        let frame =
+            Mat::new_rows_cols_with_default(48, 64, opencv::core::CV_8UC3, Scalar::all(gray))
+                .expect("frame");
+        writer.write(&frame).expect("write frame");
+    }
+    writer.release().expect("close video");
+
+    let intrinsics = CameraModel::centred(64, 48, 1.0);
+    let mut camera = OpencvCamera::new(CameraSource::Video(path.clone()), intrinsics);
+    for gray in [40.0, 120.0, 200.0] {
+        let image = camera.capture().expect("a frame");
+        assert_eq!((image.cols(), image.rows()), (64, 48));
+        let mean = opencv::core::mean_def(&image).expect("mean")[0];
+        assert!((mean - gray).abs() < 8.0, "{mean} for {gray}");
+    }
+    match camera.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => {
+            assert!(reason.contains("run.avi: has no more frames"), "{reason}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut missing =
+        OpencvCamera::new(CameraSource::Video(dir.path().join("none.avi")), intrinsics);
+    match missing.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => {
+            assert!(reason.contains("none.avi: cannot be opened"), "{reason}")
         }
         other => panic!("{other:?}"),
     }
