@@ -189,6 +189,14 @@ fn gray_image(width: i32, height: i32) -> Mat {
         .expect("image")
 }
 
+/// `camera`'s next capture must fail as unusable, saying `says`.
+fn assert_unusable(camera: &mut OpencvCamera, says: &str) {
+    match camera.capture() {
+        Err(DeviceError::Unusable { reason, .. }) => assert!(reason.contains(says), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+}
+
 #[test]
 fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -209,24 +217,11 @@ fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
         assert_eq!((image.cols(), image.rows()), (64, 48));
     }
     // c.png is not the size the intrinsics describe.
-    match camera.capture() {
-        Err(DeviceError::Unusable { reason, .. }) => assert!(reason.contains("32×48"), "{reason}"),
-        other => panic!("{other:?}"),
-    }
-    match camera.capture() {
-        Err(DeviceError::Unusable { reason, .. }) => {
-            assert!(reason.contains("all 3 images"), "{reason}")
-        }
-        other => panic!("{other:?}"),
-    }
+    assert_unusable(&mut camera, "32×48");
+    assert_unusable(&mut camera, "all 3 images");
     let mut missing =
         OpencvCamera::new(CameraSource::Folder(dir.path().join("nowhere")), intrinsics);
-    match missing.capture() {
-        Err(DeviceError::Unusable { reason, .. }) => {
-            assert!(reason.contains("nowhere"), "{reason}")
-        }
-        other => panic!("{other:?}"),
-    }
+    assert_unusable(&mut missing, "nowhere");
 }
 
 #[test]
@@ -260,20 +255,10 @@ fn a_video_camera_plays_its_frames_then_says_it_has_no_more() {
         let mean = opencv::core::mean_def(&image).expect("mean")[0];
         assert!((mean - gray).abs() < 8.0, "{mean} for {gray}");
     }
-    match camera.capture() {
-        Err(DeviceError::Unusable { reason, .. }) => {
-            assert!(reason.contains("run.avi: has no more frames"), "{reason}")
-        }
-        other => panic!("{other:?}"),
-    }
+    assert_unusable(&mut camera, "run.avi: has no more frames");
     let mut missing =
         OpencvCamera::new(CameraSource::Video(dir.path().join("none.avi")), intrinsics);
-    match missing.capture() {
-        Err(DeviceError::Unusable { reason, .. }) => {
-            assert!(reason.contains("none.avi: cannot be opened"), "{reason}")
-        }
-        other => panic!("{other:?}"),
-    }
+    assert_unusable(&mut missing, "none.avi: cannot be opened");
 }
 
 #[test]
