@@ -312,10 +312,13 @@ fn held_out_real_photographs() {
 /// union DICE 0.676, the count right in 9 of 15, grasp points 2.9 px from
 /// the labelled centre lines on average (models/README.md says why the
 /// first two are low); the bounds allow a little drift, keep the grasp
-/// point inside the 5 px goal, and fail on a worse model or pipeline.
+/// point inside the 5 px goal, and fail on a worse model or pipeline. Of
+/// the 95 labelled cables, 3 are not found, all short pieces at the
+/// border; of the 95 found, 3 match no label.
 const HELD_OUT_PIPELINE_DICE: f64 = 0.655;
 const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 7;
 const HELD_OUT_PIPELINE_GRASP_PX: f64 = 4.5;
+const HELD_OUT_PIPELINE_UNMATCHED: usize = 4;
 
 #[test]
 fn held_out_real_photographs_through_the_pipeline() {
@@ -347,6 +350,12 @@ fn held_out_real_photographs_through_the_pipeline() {
             .is_some_and(|d| d <= HELD_OUT_PIPELINE_GRASP_PX),
         "{summary:?}"
     );
+    // Every labelled cable wholly in view is found.
+    let missed: Vec<_> = scores.iter().flat_map(|s| &s.missed).collect();
+    assert!(missed.len() <= HELD_OUT_PIPELINE_UNMATCHED, "{missed:?}");
+    assert!(missed.iter().all(|m| m.at_border), "{missed:?}");
+    let unlabelled = scores.iter().map(|s| s.unlabelled.len()).sum::<usize>();
+    assert!(unlabelled <= HELD_OUT_PIPELINE_UNMATCHED, "{unlabelled}");
 }
 
 fn read(dir: &Path, name: &str, flags: i32) -> Mat {
