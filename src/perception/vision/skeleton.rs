@@ -102,15 +102,6 @@ impl Grid {
         ]
     }
 
-    /// The padded index of the pixel nearest `p`, if it is in the image.
-    fn index_of(&self, p: [f64; 2]) -> Option<usize> {
-        let rows = self.on.len() / self.stride - 2;
-        let (x, y) = (p[0].round(), p[1].round());
-        let inside =
-            (0.0..(self.stride - 2) as f64).contains(&x) && (0.0..rows as f64).contains(&y);
-        inside.then(|| (y as usize + 1) * self.stride + x as usize + 1)
-    }
-
     /// The 8 neighbours' states, clockwise from north.
     fn ring(&self, i: usize) -> [u8; 8] {
         let mut r = [0u8; 8];
@@ -591,6 +582,14 @@ fn bridge(before: &[[f64; 2]], after: &[[f64; 2]], span: usize) -> Vec<[f64; 2]>
         .collect()
 }
 
+/// Whether the pixel nearest `p` is in `mask` (CV_8U) and set.
+fn on_mask(mask: &Mat, p: [f64; 2]) -> bool {
+    let (x, y) = (p[0].round(), p[1].round());
+    (0.0..f64::from(mask.cols())).contains(&x)
+        && (0.0..f64::from(mask.rows())).contains(&y)
+        && mask.at_2d::<u8>(y as i32, x as i32).is_ok_and(|&v| v != 0)
+}
+
 /// Bending, in radians, of going in along `a` (pointing out of the
 /// junction) and out along `b`: 0 for a straight continuation.
 fn bend_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -697,7 +696,6 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
     let mut grid = Grid::from_mask(mask)?;
     let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
     let area = fg.len() as f64;
-    let mask_on = grid.on.clone();
     grid.thin(&mut fg);
     grid.remove_redundant(&mut fg);
     let width_px = if fg.is_empty() {
@@ -768,10 +766,7 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
             if entered_crossing {
                 let across = bridge(&pts, own, span);
                 // One that leaves the mask joins what are no one cable.
-                if across
-                    .iter()
-                    .all(|&p| graph.grid.index_of(p).is_some_and(|i| mask_on[i] != 0))
-                {
+                if across.iter().all(|&p| on_mask(mask, p)) {
                     pts.extend(across);
                 }
             }
