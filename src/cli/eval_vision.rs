@@ -10,14 +10,14 @@ use cablecell::perception::vision::eval::{
 use cablecell::perception::vision::network::FLOAT_MODEL;
 use cablecell::perception::vision::{MaskNetwork, VisionOutput};
 use clap::Args;
-use opencv::core::{Mat, Point, Scalar, Vector};
+use opencv::core::{Mat, Point, Scalar};
 use opencv::imgproc;
 use opencv::prelude::*;
 use serde::Serialize;
 
 use super::Status;
 use super::vision_io::{
-    InstancesArg, MaskArg, VisionArgs, create_dir, draw_overlay, read_image, write_png,
+    InstancesArg, MaskArg, VisionArgs, create_dir, draw_line, draw_overlay, read_image, write_png,
 };
 
 #[derive(Args, Debug, Clone)]
@@ -305,11 +305,6 @@ fn draw_comparison(
     image_score: &ImageScore,
 ) -> opencv::Result<Mat> {
     let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
-    let to_points = |line: &[[f64; 2]]| -> Vector<Point> {
-        line.iter()
-            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
-            .collect()
-    };
     let label = |drawn: &mut Mat, text: &str, at: [f64; 2]| {
         // Beside the point, kept inside the image.
         let x = (at[0].round() as i32 + 8).clamp(0, (drawn.cols() - 150).max(0));
@@ -329,16 +324,13 @@ fn draw_comparison(
     };
     let mut drawn = draw_overlay(image, output)?;
     for line in &truth.polylines_px {
-        let curves = Vector::<Vector<Point>>::from_iter([to_points(line)]);
-        let white = Scalar::all(255.0);
-        imgproc::polylines(&mut drawn, &curves, false, white, 1, imgproc::LINE_AA, 0)?;
+        draw_line(&mut drawn, line, Scalar::all(255.0), 1)?;
     }
     for missed in &image_score.missed {
         let Some(line) = truth.polylines_px.get(missed.index) else {
             continue;
         };
-        let curves = Vector::<Vector<Point>>::from_iter([to_points(line)]);
-        imgproc::polylines(&mut drawn, &curves, false, red, 3, imgproc::LINE_AA, 0)?;
+        draw_line(&mut drawn, line, red, 3)?;
         if let Some(&middle) = line.get(line.len() / 2) {
             label(&mut drawn, &format!("#{} not found", missed.index), middle)?;
         }

@@ -181,14 +181,7 @@ pub fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
     for (k, cable) in output.cables.iter().enumerate() {
         let (b, g, r) = COLOURS[k % COLOURS.len()];
         let colour = Scalar::new(b, g, r, 0.0);
-        let points: Vector<Point> = cable
-            .samples_px
-            .iter()
-            .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
-            .collect();
-        let mut curves = Vector::<Vector<Point>>::new();
-        curves.push(points);
-        imgproc::polylines(&mut drawn, &curves, false, colour, 2, imgproc::LINE_AA, 0)?;
+        draw_line(&mut drawn, &cable.samples_px, colour, 2)?;
         let grasp = Point::new(
             cable.grasp_px[0].round() as i32,
             cable.grasp_px[1].round() as i32,
@@ -223,4 +216,27 @@ pub fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
         )?;
     }
     Ok(drawn)
+}
+
+/// Draws the polyline through `line_px` on `image`, `thickness` px wide.
+pub fn draw_line(
+    image: &mut Mat,
+    line_px: &[[f64; 2]],
+    colour: Scalar,
+    thickness: i32,
+) -> opencv::Result<()> {
+    let points: Vector<Point> = line_px
+        .iter()
+        .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+        .collect();
+    let curves = Vector::<Vector<Point>>::from_iter([points]);
+    imgproc::polylines(
+        image,
+        &curves,
+        false,
+        colour,
+        thickness,
+        imgproc::LINE_AA,
+        0,
+    )
 }
