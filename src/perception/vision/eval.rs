@@ -381,22 +381,20 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         }
     }
     pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut truth_used = vec![false; truth.masks.len()];
-    let mut pred_used = vec![false; cables.len()];
-    let mut truth_found = vec![false; truth.masks.len()];
-    let mut pred_labelled = vec![false; cables.len()];
+    // The DICE each true cable and each instance was matched at.
+    let mut truth_dice: Vec<Option<f64>> = vec![None; truth.masks.len()];
+    let mut pred_dice: Vec<Option<f64>> = vec![None; cables.len()];
     let mut matched = 0.0;
     for (d, t, p) in pairs {
-        if !truth_used[t] && !pred_used[p] {
-            truth_used[t] = true;
-            pred_used[p] = true;
+        if truth_dice[t].is_none() && pred_dice[p].is_none() {
+            truth_dice[t] = Some(d);
+            pred_dice[p] = Some(d);
             matched += d;
-            truth_found[t] = d >= MATCH_MIN_DICE;
-            pred_labelled[p] = d >= MATCH_MIN_DICE;
         }
     }
+    let same_cable = |d: &Option<f64>| d.is_some_and(|d| d >= MATCH_MIN_DICE);
     let missed = (0..truth.masks.len())
-        .filter(|&t| !truth_found[t])
+        .filter(|&t| !same_cable(&truth_dice[t]))
         .map(|t| Unmatched {
             index: t,
             length_px: truth.polylines_px.get(t).map(|line| polyline_length(line)),
@@ -404,7 +402,7 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         })
         .collect();
     let unlabelled = (0..cables.len())
-        .filter(|&p| !pred_labelled[p])
+        .filter(|&p| !same_cable(&pred_dice[p]))
         .map(|p| Unmatched {
             index: p,
             length_px: Some(polyline_length(&cables[p].samples_px)),
