@@ -469,7 +469,7 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     match labels_own_dice(samples) {
         Ok(Some(labels)) => rows.push(SweepRow {
             setting: format!(
-                "labels' own centre lines, drawn {:.1} px wide",
+                "labels' own centre lines, smoothed, drawn {:.1} px wide",
                 labels.width_px
             ),
             total_ms_median: None,
@@ -540,7 +540,7 @@ fn print_evaluation(dir: &Path, report: &Report) {
     line("union DICE", &e.union_dice);
     if let Some(labels) = &report.labels_own_union_dice {
         println!(
-            "  {:<22} {}  (the labelled centre lines drawn {:.1} px wide against the labelled masks)",
+            "  {:<22} {}  (the labelled centre lines, smoothed as the masks were drawn, {:.1} px wide against the labelled masks)",
             "labels' own union DICE",
             summary(&labels.union_dice),
             labels.width_px
