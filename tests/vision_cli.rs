@@ -265,6 +265,9 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
     assert_eq!(e["notes"].as_array().map(Vec::len), Some(0), "{e}");
+    for side in ["labelled_length_found", "found_length_labelled"] {
+        assert!(e[side]["share"].as_f64().expect("share") > 0.97, "{e}");
+    }
     // The rendered masks are the 7 px cables along their centre lines, so
     // the labels agree with themselves at about that width.
     let labels = &e["labels_own_union_dice"];
@@ -324,6 +327,19 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
     // B is 335 px long; its detection a little shorter at the ends.
     let b_px = unlabelled[0]["length_px"].as_f64().expect("length");
     assert!((315.0..=340.0).contains(&b_px), "{e}");
+    // Of the labelled length, A's 495 px is found and C's 224 px is not;
+    // of the found length, A's is labelled and B's is not.
+    let share = |side: &str| e[side]["share"].as_f64().expect("share");
+    let labelled_share = 495.0 / (495.0 + c_px);
+    let found_share = 495.0 / (495.0 + b_px);
+    assert!(
+        (share("labelled_length_found") - labelled_share).abs() < 0.02,
+        "{e}"
+    );
+    assert!(
+        (share("found_length_labelled") - found_share).abs() < 0.02,
+        "{e}"
+    );
 
     let overlay = dir.path().join("overlay");
     let human = cablecell(&[&args[..], &["--overlay", text(&overlay)]].concat());
@@ -341,6 +357,14 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
         )),
         "{printed}"
     );
+    assert!(
+        printed.contains(&format!(
+            "labelled length found  {:.1} % of",
+            100.0 * share("labelled_length_found")
+        )),
+        "{printed}"
+    );
+    assert!(printed.contains("; under 90 % in 00000 "), "{printed}");
     // The overlay draws the labelled centre lines in white, and the one
     // not found thick in red: A's and C's midpoints.
     let drawn = imgcodecs::imread(text(&overlay.join("00000.png")), imgcodecs::IMREAD_COLOR)

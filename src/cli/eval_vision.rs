@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::eval::{
-    GroundTruth, ImageScore, Unmatched, label_consistency, score,
+    CENTRELINE_NEAR_PX, GroundTruth, ImageScore, Unmatched, label_consistency, score,
 };
 use cablecell::perception::vision::network::FLOAT_MODEL;
 use cablecell::perception::vision::{MaskNetwork, VisionOutput};
@@ -64,6 +64,10 @@ struct Evaluation {
     labels_found: Option<Rate>,
     /// Detections that match a labelled cable, over all images.
     found_labelled: Option<Rate>,
+    /// The labelled centre lines' length near a found one, over all images.
+    labelled_length_found: Option<LengthShare>,
+    /// The found centre lines' length near a labelled one, over all images.
+    found_length_labelled: Option<LengthShare>,
     centerline_px: Option<Summary>,
     grasp_error_px: Option<Summary>,
     /// Per stage, and "total": median and 95th percentile among the rest.
@@ -282,6 +286,8 @@ fn evaluate(
         ),
         labels_found: matched_rate(&per_image, |s| (s.truth_count, s.missed.len())),
         found_labelled: matched_rate(&per_image, |s| (s.predicted_count, s.unlabelled.len())),
+        labelled_length_found: length_share(&per_image, labelled_length_found),
+        found_length_labelled: length_share(&per_image, found_length_labelled),
         centerline_px: of(&|s| s.centerline_px),
         grasp_error_px: of(&|s| s.grasp_error_px),
         stage_ms: stage_ms
@@ -357,6 +363,38 @@ fn matched_rate(
         .map(|(_, s)| side(s))
         .fold((0, 0), |(a, u), (n, m)| (a + n, u + m));
     Rate::wilson(all - unmatched, all)
+}
+
+/// How much of one side's centre-line length lies within
+/// [`CENTRELINE_NEAR_PX`] of the other side's.
+#[derive(Serialize)]
+struct LengthShare {
+    share: f64,
+    length_px: f64,
+}
+
+/// The labelled length of an image, and how much of it was found.
+fn labelled_length_found(s: &ImageScore) -> (f64, f64) {
+    (s.labelled_length_px, s.labelled_length_found_px)
+}
+
+/// The found length of an image, and how much of it is labelled.
+fn found_length_labelled(s: &ImageScore) -> (f64, f64) {
+    (s.found_length_px, s.found_length_labelled_px)
+}
+
+fn length_share(
+    per_image: &[(String, ImageScore)],
+    side: fn(&ImageScore) -> (f64, f64),
+) -> Option<LengthShare> {
+    let (length_px, near_px) = per_image
+        .iter()
+        .map(|(_, s)| side(s))
+        .fold((0.0, 0.0), |(a, n), (l, m)| (a + l, n + m));
+    (length_px > 0.0).then(|| LengthShare {
+        share: near_px / length_px,
+        length_px,
+    })
 }
 
 /// One row of the sweep: what it changes and what it scored.
@@ -522,6 +560,50 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     Status::Success
 }
 
+/// Images whose share is lower than this are named, lowest first.
+const LOW_LENGTH_SHARE: f64 = 0.9;
+
+/// A [`LengthShare`] and the images where it was lowest.
+fn print_length_share(
+    name: &str,
+    what: &str,
+    share: &Option<LengthShare>,
+    per_image: &[(String, ImageScore)],
+    side: fn(&ImageScore) -> (f64, f64),
+) {
+    let Some(share) = share else {
+        return;
+    };
+    let mut low: Vec<(&str, f64)> = per_image
+        .iter()
+        .filter_map(|(stem, s)| {
+            let (length_px, near_px) = side(s);
+            let image_share = near_px / length_px;
+            (length_px > 0.0 && image_share < LOW_LENGTH_SHARE)
+                .then_some((stem.as_str(), image_share))
+        })
+        .collect();
+    low.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let low: Vec<String> = low
+        .iter()
+        .map(|(stem, image_share)| format!("{stem} {:.0} %", 100.0 * image_share))
+        .collect();
+    let lowest = if low.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; under {:.0} % in {}",
+            100.0 * LOW_LENGTH_SHARE,
+            low.join(", ")
+        )
+    };
+    println!(
+        "  {name:<22} {:.1} % of {:.0} px {what} (within {CENTRELINE_NEAR_PX} px){lowest}",
+        100.0 * share.share,
+        share.length_px
+    );
+}
+
 fn print_evaluation(dir: &Path, report: &Report) {
     let e = &report.evaluation;
     println!("{}: {} images", dir.display(), e.images);
@@ -583,6 +665,20 @@ fn print_evaluation(dir: &Path, report: &Report) {
         e.per_image
             .iter()
             .map(|(stem, s)| (stem, s.predicted_count, &s.unlabelled)),
+    );
+    print_length_share(
+        "labelled length found",
+        "of the labelled centre lines, near a found one",
+        &e.labelled_length_found,
+        &e.per_image,
+        labelled_length_found,
+    );
+    print_length_share(
+        "found length labelled",
+        "of the found centre lines, near a labelled one",
+        &e.found_length_labelled,
+        &e.per_image,
+        found_length_labelled,
     );
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);

@@ -310,7 +310,22 @@ pub struct ImageScore {
     pub missed: Vec<Unmatched>,
     /// Instances that match no labelled cable: why a count came out high.
     pub unlabelled: Vec<Unmatched>,
+    /// Length of the labelled centre lines (px), and of it, the length
+    /// within [`CENTRELINE_NEAR_PX`] of a found one: how much of the
+    /// cables was found, whatever the masks' widths and the labels' offsets.
+    pub labelled_length_px: f64,
+    pub labelled_length_found_px: f64,
+    /// Length of the found centre lines (px), and of it, the length within
+    /// [`CENTRELINE_NEAR_PX`] of a labelled one.
+    pub found_length_px: f64,
+    pub found_length_labelled_px: f64,
 }
+
+/// How near (px) a point of one centre line must lie to the other side's
+/// for its length to count as found (or labelled): the grasp point's goal.
+/// Labels a few pixels beside their wires stay within it; a cable missed,
+/// or found where none is labelled, does not.
+pub const CENTRELINE_NEAR_PX: f64 = 5.0;
 
 /// The instance DICE at which a found cable and a labelled one are the
 /// same cable. In cables-dev, labels that lie a few pixels off their wires
@@ -394,6 +409,27 @@ pub fn distance_to_polylines(p: [f64; 2], polylines: &[Vec<[f64; 2]>]) -> f64 {
     best
 }
 
+/// The length of `lines` (px), and of it, the length within
+/// [`CENTRELINE_NEAR_PX`] of `others`, measured piece by piece, each
+/// piece at most a pixel long.
+fn length_near(lines: &[Vec<[f64; 2]>], others: &[Vec<[f64; 2]>]) -> (f64, f64) {
+    let (mut total_px, mut near_px) = (0.0, 0.0);
+    for w in lines.iter().flat_map(|line| line.windows(2)) {
+        let (a, b) = (w[0], w[1]);
+        let length_px = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let pieces = length_px.ceil().max(1.0);
+        for i in 0..pieces as usize {
+            let t = (i as f64 + 0.5) / pieces;
+            let middle = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            if distance_to_polylines(middle, others) <= CENTRELINE_NEAR_PX {
+                near_px += length_px / pieces;
+            }
+        }
+        total_px += length_px;
+    }
+    (total_px, near_px)
+}
+
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
     let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
     (n > 0).then(|| sum / n as f64)
@@ -473,6 +509,11 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
             .iter()
             .map(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px)),
     );
+    let found_lines: Vec<Vec<[f64; 2]>> = cables.iter().map(|c| c.samples_px.clone()).collect();
+    let (labelled_length_px, labelled_length_found_px) =
+        length_near(&truth.polylines_px, &found_lines);
+    let (found_length_px, found_length_labelled_px) =
+        length_near(&found_lines, &truth.polylines_px);
     ImageScore {
         union_iou,
         union_dice,
@@ -484,6 +525,10 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         grasp_error_px,
         missed,
         unlabelled,
+        labelled_length_px,
+        labelled_length_found_px,
+        found_length_px,
+        found_length_labelled_px,
     }
 }
 
@@ -657,6 +702,59 @@ mod tests {
         );
         // One point: itself.
         assert_eq!(label_curve(&[[3.0, 4.0]]), vec![[3.0, 4.0]]);
+    }
+
+    /// A found cable whose centre line is the straight `from`–`to`.
+    fn found_along(from: [f64; 2], to: [f64; 2]) -> CableInstance {
+        let samples_px: Vec<[f64; 2]> = (0..=20)
+            .map(|i| {
+                let t = f64::from(i) / 20.0;
+                [
+                    from[0] + t * (to[0] - from[0]),
+                    from[1] + t * (to[1] - from[1]),
+                ]
+            })
+            .collect();
+        CableInstance {
+            spline: BSpline::fit(&samples_px, 4).unwrap(),
+            grasp_px: samples_px[10],
+            direction_rad: 0.0,
+            length_px: polyline_length(&samples_px),
+            mask: draw_paths(120, 160, &[samples_px.as_slice()], 7).unwrap(),
+            samples_px,
+        }
+    }
+
+    #[test]
+    fn centre_line_length_is_found_within_the_grasp_goal_of_the_other_side() {
+        let truth = drawn_truth(
+            vec![
+                vec![[10.0, 20.0], [150.0, 20.0]],
+                vec![[10.0, 100.0], [150.0, 100.0]],
+            ],
+            7,
+            0.0,
+        );
+        let cables = [
+            // Half of the first cable, 3 px beside its label.
+            found_along([10.0, 23.0], [80.0, 23.0]),
+            // Where nothing is labelled.
+            found_along([20.0, 60.0], [120.0, 60.0]),
+            // Along the second cable, but 6 px beside it.
+            found_along([10.0, 106.0], [150.0, 106.0]),
+        ];
+        let score = score_cables(&cables, &truth.union_mask, &truth);
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
+        assert!(near(score.labelled_length_px, 280.0), "{score:?}");
+        // 70 px beside the found half, and 4 px past its end, where the
+        // label still lies within 5 px of it (√(4² + 3²)).
+        assert!(near(score.labelled_length_found_px, 74.0), "{score:?}");
+        assert!(near(score.found_length_px, 310.0), "{score:?}");
+        assert!(near(score.found_length_labelled_px, 70.0), "{score:?}");
+
+        let none = score_cables(&[], &truth.union_mask, &truth);
+        assert_eq!(none.labelled_length_found_px, 0.0);
+        assert_eq!(none.found_length_px, 0.0);
     }
 
     #[test]
