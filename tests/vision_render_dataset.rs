@@ -247,6 +247,11 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
     assert!(rows[8]["total_ms_median"].is_null(), "{rows}");
     assert!(rows[8]["labels_found"].is_null(), "{rows}");
     assert_eq!(rows[0]["labels_found"], 1.0, "{rows}");
+    // The classical mask finds both cables along their whole length.
+    for side in ["labelled_length_found", "found_length_labelled"] {
+        assert!(rows[0][side].as_f64().expect("share") > 0.97, "{rows}");
+        assert!(rows[8][side].is_null(), "{rows}");
+    }
     let no_rounds = cablecell(&["eval-vision", text(&out), "--sweep", "--rounds", "0"]);
     assert_eq!(no_rounds.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&no_rounds.stderr).contains("--rounds"));

@@ -407,6 +407,8 @@ struct SweepRow {
     count_right: Option<f64>,
     labels_found: Option<f64>,
     found_labelled: Option<f64>,
+    labelled_length_found: Option<f64>,
+    found_length_labelled: Option<f64>,
     grasp_error_px_mean: Option<f64>,
     grasp_error_px_median: Option<f64>,
     centerline_px: Option<f64>,
@@ -498,6 +500,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             count_right: evaluation.count_right.map(|r| r.rate),
             labels_found: evaluation.labels_found.map(|r| r.rate),
             found_labelled: evaluation.found_labelled.map(|r| r.rate),
+            labelled_length_found: evaluation.labelled_length_found.map(|l| l.share),
+            found_length_labelled: evaluation.found_length_labelled.map(|l| l.share),
             grasp_error_px_mean: evaluation.grasp_error_px.as_ref().map(|s| s.mean),
             grasp_error_px_median: evaluation.grasp_error_px.as_ref().map(|s| s.median),
             centerline_px: evaluation.centerline_px.map(|s| s.mean),
@@ -516,6 +520,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             count_right: None,
             labels_found: None,
             found_labelled: None,
+            labelled_length_found: None,
+            found_length_labelled: None,
             grasp_error_px_mean: None,
             grasp_error_px_median: None,
             centerline_px: None,
@@ -536,15 +542,15 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
         args.rounds
     );
     println!(
-        "| setting | median ms | p95 ms | union DICE | count right | labels found | found labelled | grasp px mean | grasp px median | centre line px |"
+        "| setting | median ms | p95 ms | union DICE | count right | labels found | found labelled | length found | found length labelled | grasp px mean | grasp px median | centre line px |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let cell =
         |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
     let percent = |v: Option<f64>| v.map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r));
     for row in &rows {
         println!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             row.setting,
             cell(row.total_ms_median, 1),
             cell(row.total_ms_p95, 1),
@@ -552,6 +558,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             percent(row.count_right),
             percent(row.labels_found),
             percent(row.found_labelled),
+            percent(row.labelled_length_found),
+            percent(row.found_length_labelled),
             cell(row.grasp_error_px_mean, 1),
             cell(row.grasp_error_px_median, 1),
             cell(row.centerline_px, 1),
