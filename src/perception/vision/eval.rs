@@ -218,10 +218,9 @@ const LABEL_THICKNESSES_PX: std::ops::RangeInclusive<i32> = 1..=15;
 /// How well a data set's labelled centre lines explain its labelled
 /// masks: each image's union DICE of its lines' curves ([`label_curve`])
 /// drawn at one width against its union mask, at the width that fits all
-/// images best. Masks drawn by
-/// hand beside the cables hold every method's union DICE down with them:
-/// this measures how far the labels agree with themselves, as a
-/// reference, not a bound.
+/// images best. Masks drawn by hand beside the cables hold every method's
+/// union DICE down with them: this measures how far the labels agree with
+/// themselves, as a reference, not a bound.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LabelConsistency {
     /// The drawn lines' area over their length (OpenCV draws a line of
