@@ -308,6 +308,27 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
     assert!((t[0] - center[0]).abs() < 5.0, "{t:?}");
     assert!(t[1].abs() < 1e-6, "{t:?}");
     assert!((t[2] - center[2]).abs() < 1.0, "{t:?}");
+    // Read by a person: each cable's frame follows its spline.
+    let human = cablecell(&[
+        "detect",
+        path.to_str().expect("utf-8"),
+        "--cell",
+        "config/cell.sim.toml",
+        "--mask",
+        "network",
+    ]);
+    let printed = String::from_utf8_lossy(&human.stdout);
+    let frame_line = format!(
+        "    grasp frame in base: [{:.1}, {:.1}, {:.1}] mm",
+        t[0], t[1], t[2]
+    );
+    assert!(printed.contains(&frame_line), "{printed}");
+    let lines: Vec<&str> = printed.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with(&frame_line))
+        .expect("frame");
+    assert!(lines[at - 1].starts_with("    along it (px)"), "{printed}");
 
     // A cell whose camera is not calibrated cannot place them.
     let path = common::sim_cell_copy(dir.path(), without_calibration);

@@ -108,6 +108,27 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         "{printed}"
     );
     assert!(lines[2].starts_with("  cable 0: grasp at ("), "{printed}");
+    // The spline: its control points, and points at s = 0, 0.1, ..., 1
+    // from the end with the smaller x, the middle one the grasp point.
+    let points = |line: &str, label: &str| -> Vec<[f64; 2]> {
+        let list = line.strip_prefix(label).expect(line);
+        let numbers: Vec<f64> = list
+            .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+            .filter(|t| !t.is_empty())
+            .map(|t| t.parse().expect(t))
+            .collect();
+        numbers.chunks(2).map(|p| [p[0], p[1]]).collect()
+    };
+    assert!(
+        points(lines[3], "    control points (px): ").len() >= 4,
+        "{printed}"
+    );
+    let along = points(lines[4], "    along it (px), s = 0, 0.1, ..., 1: ");
+    assert_eq!(along.len(), 11, "{printed}");
+    let near = |p: [f64; 2], q: [f64; 2], px: f64| (p[0] - q[0]).hypot(p[1] - q[1]) < px;
+    assert!(near(along[0], [100.0, 100.0], 8.0), "{printed}");
+    assert!(near(along[5], [x, y], 0.2), "{printed}");
+    assert!(near(along[10], [540.0, 380.0], 8.0), "{printed}");
 }
 
 #[test]

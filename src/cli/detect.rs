@@ -153,6 +153,19 @@ pub fn detect(
     status
 }
 
+/// Points printed along each cable for a person (`--json` gives
+/// [`CableInstance::samples_px`]): s in steps of 0.1.
+const SAMPLES_PRINTED: usize = 11;
+
+/// `(x, y) (x, y) ...`, to a tenth of a pixel.
+fn points_text(points_px: &[[f64; 2]]) -> String {
+    points_px
+        .iter()
+        .map(|p| format!("({:.1}, {:.1})", p[0], p[1]))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 fn print_report(report: &ImageReport) {
     let stages: Vec<String> = report
         .timings_ms
@@ -180,11 +193,19 @@ fn print_report(report: &ImageReport) {
             cable.direction_rad,
             cable.spline.control_points_px.len()
         );
+        println!(
+            "    control points (px): {}",
+            points_text(&cable.spline.control_points_px)
+        );
+        println!(
+            "    along it (px), s = 0, 0.1, ..., 1: {}",
+            points_text(&cable.spline.sample(SAMPLES_PRINTED))
+        );
         if let Some(Some(frame)) = report.grasp_frames_in_base.get(k) {
             let [x, y, z] = frame.translation_mm;
             let [roll, pitch, yaw] = frame.rotation_rpy_rad;
             println!(
-                "           in base at [{x:.1}, {y:.1}, {z:.1}] mm, rpy [{roll:+.4}, {pitch:+.4}, {yaw:+.4}] rad"
+                "    grasp frame in base: [{x:.1}, {y:.1}, {z:.1}] mm, rpy [{roll:+.4}, {pitch:+.4}, {yaw:+.4}] rad"
             );
         }
     }
