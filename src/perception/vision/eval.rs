@@ -66,7 +66,9 @@ fn parse_polyline(path: &Path, line_no: usize, line: &str) -> Result<Vec<[f64; 2
     for word in line.split_whitespace() {
         let v: f64 = word
             .parse()
-            .map_err(|_| bad(format!("`{word}` is not a number")))?;
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| bad(format!("`{word}` is not a number")))?;
         numbers.push(v);
     }
     let Some((&count, coords)) = numbers.split_first() else {
@@ -576,6 +578,9 @@ mod tests {
             "{err}"
         );
         assert!(parse_polyline(p, 1, "2 a 2 3 4").is_err());
+        let err = parse_polyline(p, 2, "2 1 2 inf 4").unwrap_err();
+        assert!(err.to_string().contains("`inf` is not a number"), "{err}");
+        assert!(parse_polyline(p, 1, "2 1 NaN 3 4").is_err());
     }
 
     #[test]
