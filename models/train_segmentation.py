@@ -178,6 +178,19 @@ def load_synthetic(folder: Path, limit: int) -> tuple[list[np.ndarray], list[np.
     return load_stems(folder, stems, (NET_W, NET_H))
 
 
+def recolour_background(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The image with everything but the cables given one random, strong
+    hue, its shading kept: pale cables on coloured paper, which the real
+    training photographs (white paper, wood) lack. Only for rendered
+    images, whose masks are exact; their soft edges blend the two."""
+    hsv = cv2.cvtColor(img, cv2.COLOR_BGR2HSV)
+    hsv[..., 0] = rng.integers(0, 180)
+    hsv[..., 1] = np.clip(hsv[..., 1].astype(np.int32) + rng.integers(60, 160), 0, 255)
+    tinted = cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR).astype(np.float32)
+    cable = np.clip(mask, 0, 1)[..., None]
+    return (cable * img + (1 - cable) * tinted).round().astype(np.uint8)
+
+
 def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int) -> tuple[np.ndarray, np.ndarray]:
     """A random crop x crop window of a randomly flipped, scaled, rotated and
     recoloured image, with its mask warped alike."""
@@ -228,7 +241,8 @@ def loss_fn(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return bce + dice.mean()
 
 
-def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, crop: int, real_fraction: float):
+def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, crop: int, real_fraction: float,
+               recolour_fraction: float):
     xs, ys = [], []
     for _ in range(batch):
         if rng.random() < real_fraction:
@@ -237,6 +251,8 @@ def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, 
         else:
             j = rng.integers(0, len(synth_imgs))
             img, m = synth_imgs[j], synth_masks[j]
+            if recolour_fraction > 0 and rng.random() < recolour_fraction:
+                img = recolour_background(rng, img, m)
         img, m = augment(rng, img, m, crop)
         xs.append(img)
         ys.append(m)
@@ -262,7 +278,8 @@ def train(args) -> CableNet:
     t_train = time.time()
     running = 0.0
     for step in range(1, args.steps + 1):
-        x, y = make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, args.batch, args.crop, args.real_fraction)
+        x, y = make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, args.batch, args.crop, args.real_fraction,
+                          args.recolour_fraction)
         loss = loss_fn(model.logits(x), y)
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -373,6 +390,9 @@ def main() -> int:
     parser.add_argument("--synthetic", type=Path, help="a folder written by `cablecell render-dataset` (required to train)")
     parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
+    parser.add_argument("--recolour-fraction", type=float, default=0.0,
+                        help="share of rendered images whose background is given a strong hue "
+                             "(recolour_background; not used for the shipped model, see models/README.md)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--eval-only", action="store_true", help="measure existing models")
     args = parser.parse_args()
