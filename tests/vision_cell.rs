@@ -269,15 +269,15 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("scene.png");
     assert!(imgcodecs::imwrite(&path, &image, &opencv::core::Vector::new()).expect("imwrite"));
-    let out = cablecell(&[
+    let args = [
         "detect",
         path.to_str().expect("utf-8"),
         "--cell",
         "config/cell.sim.toml",
         "--mask",
         "network",
-        "--json",
-    ]);
+    ];
+    let out = cablecell(&[&args[..], &["--json"]].concat());
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -309,14 +309,7 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
     assert!(t[1].abs() < 1e-6, "{t:?}");
     assert!((t[2] - center[2]).abs() < 1.0, "{t:?}");
     // Read by a person: each cable's frame follows its spline.
-    let human = cablecell(&[
-        "detect",
-        path.to_str().expect("utf-8"),
-        "--cell",
-        "config/cell.sim.toml",
-        "--mask",
-        "network",
-    ]);
+    let human = cablecell(&args);
     let printed = String::from_utf8_lossy(&human.stdout);
     let frame_line = format!(
         "    grasp frame in base: [{:.1}, {:.1}, {:.1}] mm",
