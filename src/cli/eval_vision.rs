@@ -397,8 +397,9 @@ fn length_share(
     })
 }
 
-/// One row of the sweep: what it changes and what it scored.
-#[derive(Serialize)]
+/// One row of the sweep: what it changes and what it scored (`None`:
+/// not measured for this row).
+#[derive(Serialize, Default)]
 struct SweepRow {
     setting: String,
     total_ms_median: Option<f64>,
@@ -514,17 +515,8 @@ fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
                 "labels' own centre lines, smoothed, drawn {:.1} px wide",
                 labels.width_px
             ),
-            total_ms_median: None,
-            total_ms_p95: None,
             union_dice: Some(labels.union_dice.mean),
-            count_right: None,
-            labels_found: None,
-            found_labelled: None,
-            labelled_length_found: None,
-            found_length_labelled: None,
-            grasp_error_px_mean: None,
-            grasp_error_px_median: None,
-            centerline_px: None,
+            ..SweepRow::default()
         }),
         Ok(None) => {}
         Err(message) => {
