@@ -11,7 +11,7 @@ use cablecell::hw::camera::{Camera, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
 use cablecell::task::cell_file::{CameraBackend, CameraSource};
 use cablecell::task::load_cell;
-use common::{cablecell, root};
+use common::{cablecell, json_of, root};
 use nalgebra::Vector3;
 use opencv::core::{Mat, Scalar};
 use opencv::imgcodecs;
@@ -277,14 +277,7 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
         "--mask",
         "network",
     ];
-    let out = cablecell(&[&args[..], &["--json"]].concat());
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let reports = json_of(&[&args[..], &["--json"]].concat());
     let frames = reports[0]["grasp_frames_in_base"]
         .as_array()
         .expect("frames");
