@@ -397,3 +397,40 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
     let on_c = bgr(550, 100);
     assert!(on_c[2] > 200 && on_c[0] < 80 && on_c[1] < 80, "{on_c:?}");
 }
+
+#[test]
+fn eval_vision_finds_labels_that_lie_beside_their_cables() {
+    // The labels lie 2 px above the cable drawn in the image.
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_scene(
+        dir.path(),
+        "00000",
+        vec![cable([80.0, 298.0], [560.0, 178.0])],
+        true,
+    );
+    write_scene(
+        dir.path(),
+        "00000",
+        vec![cable([80.0, 300.0], [560.0, 180.0])],
+        false,
+    );
+    let args = [
+        "eval-vision",
+        text(dir.path()),
+        "--straight-edge-radius-px",
+        "0",
+    ];
+    let e = json_of(&[&args[..], &["--json"]].concat());
+    let score = &e["per_image"][0][1];
+    assert_eq!(score["mask_offset_px"], serde_json::json!([0, -2]), "{e}");
+    let (dice, moved) = (
+        score["union_dice"].as_f64().expect("dice"),
+        score["union_dice_at_offset"].as_f64().expect("moved"),
+    );
+    assert!(moved > dice + 0.1, "{e}");
+    let printed = String::from_utf8_lossy(&cablecell(&args).stdout).into_owned();
+    assert!(
+        printed.contains("median move (dx, dy) (0, -2) px; 2 px or more in 00000 (0, -2))"),
+        "{printed}"
+    );
+}

@@ -316,12 +316,15 @@ fn held_out_real_photographs() {
 /// the 95 labelled cables, 3 are not found, all short pieces at the
 /// border; of the 95 found, 3 match no label. Of the labelled centre
 /// lines' length, 91.7 % lies within 5 px of a found one, and 91.5 % of
-/// the found length within 5 px of a labelled one.
+/// the found length within 5 px of a labelled one. The labels lie above
+/// the wires found: moved up (by 1–3 px) in 13 of the 15 images, the found
+/// masks match them at a mean union DICE of 0.705.
 const HELD_OUT_PIPELINE_DICE: f64 = 0.655;
 const HELD_OUT_PIPELINE_LENGTH_SHARE: f64 = 0.89;
 const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 7;
 const HELD_OUT_PIPELINE_GRASP_PX: f64 = 4.5;
 const HELD_OUT_PIPELINE_UNMATCHED: usize = 4;
+const HELD_OUT_PIPELINE_MOVED_UP: usize = 11;
 
 #[test]
 fn held_out_real_photographs_through_the_pipeline() {
@@ -375,6 +378,14 @@ fn held_out_real_photographs_through_the_pipeline() {
     assert!(
         found_labelled >= HELD_OUT_PIPELINE_LENGTH_SHARE,
         "{found_labelled}"
+    );
+    let moved_up = scores.iter().filter(|s| s.mask_offset_px[1] < 0).count();
+    assert!(moved_up >= HELD_OUT_PIPELINE_MOVED_UP, "{moved_up}");
+    assert!(
+        scores
+            .iter()
+            .all(|s| s.union_dice_at_offset >= s.union_dice),
+        "{scores:?}"
     );
 }
 

@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::eval::{
-    CENTRELINE_NEAR_PX, GroundTruth, ImageScore, Unmatched, label_consistency, score,
+    CENTRELINE_NEAR_PX, GroundTruth, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
+    label_consistency, score,
 };
 use cablecell::perception::vision::network::FLOAT_MODEL;
 use cablecell::perception::vision::{MaskNetwork, VisionOutput};
@@ -58,6 +59,9 @@ struct Evaluation {
     images: usize,
     union_iou: Option<Summary>,
     union_dice: Option<Summary>,
+    /// The union DICE with each image's found mask moved by its
+    /// [`ImageScore::mask_offset_px`].
+    union_dice_at_offset: Option<Summary>,
     instance_dice: Option<Summary>,
     count_right: Option<Rate>,
     /// Labelled cables that a detection matches, over all images.
@@ -279,6 +283,7 @@ fn evaluate(
         images: per_image.len(),
         union_iou: of(&|s| Some(s.union_iou)),
         union_dice: of(&|s| Some(s.union_dice)),
+        union_dice_at_offset: of(&|s| Some(s.union_dice_at_offset)),
         instance_dice: of(&|s| Some(s.instance_dice)),
         count_right: Rate::wilson(
             per_image.iter().filter(|(_, s)| s.count_right).count(),
@@ -604,15 +609,16 @@ fn print_length_share(
     );
 }
 
+fn summary(s: &Summary) -> String {
+    format!(
+        "mean {:.3}  median {:.3}  p95 {:.3}  max {:.3}",
+        s.mean, s.median, s.p95, s.max
+    )
+}
+
 fn print_evaluation(dir: &Path, report: &Report) {
     let e = &report.evaluation;
     println!("{}: {} images", dir.display(), e.images);
-    let summary = |s: &Summary| {
-        format!(
-            "mean {:.3}  median {:.3}  p95 {:.3}  max {:.3}",
-            s.mean, s.median, s.p95, s.max
-        )
-    };
     let line = |name: &str, s: &Option<Summary>| {
         if let Some(s) = s {
             println!("  {name:<22} {}", summary(s));
@@ -620,6 +626,7 @@ fn print_evaluation(dir: &Path, report: &Report) {
     };
     line("union IoU", &e.union_iou);
     line("union DICE", &e.union_dice);
+    print_offsets(&e.union_dice_at_offset, &e.per_image);
     if let Some(labels) = &report.labels_own_union_dice {
         println!(
             "  {:<22} {}  (the labelled centre lines, smoothed as the masks were drawn, {:.1} px wide against the labelled masks)",
@@ -693,6 +700,42 @@ fn print_evaluation(dir: &Path, report: &Report) {
     for (stem, note) in &e.notes {
         println!("  note: {stem}: {note}");
     }
+}
+
+/// Images whose found mask moves this far (px, along either axis) to
+/// match its labels best are named.
+const LARGE_OFFSET_PX: i32 = 2;
+
+/// The union DICE with the found masks moved onto the labels, the median
+/// move, and the images moved [`LARGE_OFFSET_PX`] or more.
+fn print_offsets(dice: &Option<Summary>, per_image: &[(String, ImageScore)]) {
+    let Some(dice) = dice else {
+        return;
+    };
+    let median_px = |axis: usize| {
+        let moves: Vec<f64> = per_image
+            .iter()
+            .map(|(_, s)| f64::from(s.mask_offset_px[axis]))
+            .collect();
+        Summary::of(&moves).map_or(0.0, |s| s.median)
+    };
+    let large: Vec<String> = per_image
+        .iter()
+        .filter(|(_, s)| s.mask_offset_px.iter().any(|d| d.abs() >= LARGE_OFFSET_PX))
+        .map(|(stem, s)| format!("{stem} ({}, {})", s.mask_offset_px[0], s.mask_offset_px[1]))
+        .collect();
+    let large = if large.is_empty() {
+        String::new()
+    } else {
+        format!("; {LARGE_OFFSET_PX} px or more in {}", large.join(", "))
+    };
+    println!(
+        "  {:<22} {}  (each image's found mask moved by the whole pixels, up to {MASK_OFFSET_SEARCH_PX}, that match its labels best; median move (dx, dy) ({}, {}) px{large})",
+        "union DICE, moved",
+        summary(dice),
+        median_px(0),
+        median_px(1),
+    );
 }
 
 /// One line listing the cables of one side that none of the other side

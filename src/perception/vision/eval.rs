@@ -320,6 +320,12 @@ pub struct ImageScore {
     /// [`CENTRELINE_NEAR_PX`] of a labelled one.
     pub found_length_px: f64,
     pub found_length_labelled_px: f64,
+    /// The whole-pixel shift `[dx, dy]` of the found union mask that
+    /// matches the labelled one best ([`best_offset`]), and the union DICE
+    /// so moved: how much of the DICE lost is labels lying beside the
+    /// wires found, not wires missed.
+    pub mask_offset_px: [i32; 2],
+    pub union_dice_at_offset: f64,
 }
 
 /// How near (px) a point of one centre line must lie to the other side's
@@ -376,6 +382,53 @@ fn overlap(a: &Mat, b: &Mat) -> (f64, f64, f64) {
         return (0.0, count(a), count(b));
     }
     (count(&both), count(a), count(b))
+}
+
+/// How far (px, along each axis) [`best_offset`] moves a found mask: a
+/// little more than the 1–4 px by which cables-dev's labels lie beside
+/// their wires.
+pub const MASK_OFFSET_SEARCH_PX: i32 = 3;
+
+/// The whole-pixel shift `[dx, dy]`, each within ±[`MASK_OFFSET_SEARCH_PX`],
+/// that moves `found` to its best union DICE against `labelled` (pixels
+/// moved out of view count as unmatched), and that DICE; the smallest such
+/// shift on a tie. Masks of different sizes give `([0, 0], 0)`.
+pub fn best_offset(found: &Mat, labelled: &Mat) -> ([i32; 2], f64) {
+    if size_of(found) != size_of(labelled) {
+        return ([0, 0], 0.0);
+    }
+    let (n_found, n_labelled) = (count(found), count(labelled));
+    if n_found + n_labelled == 0.0 {
+        return ([0, 0], 1.0);
+    }
+    let (w, h) = (found.cols(), found.rows());
+    let r = MASK_OFFSET_SEARCH_PX;
+    let mut shifts: Vec<[i32; 2]> = (-r..=r)
+        .flat_map(|dx| (-r..=r).map(move |dy| [dx, dy]))
+        .collect();
+    shifts.sort_by_key(|[dx, dy]| dx * dx + dy * dy);
+    let mut best = ([0, 0], -1.0);
+    for [dx, dy] in shifts {
+        let (wide, high) = (w - dx.abs(), h - dy.abs());
+        if wide <= 0 || high <= 0 {
+            continue;
+        }
+        let from = core::Rect::new((-dx).max(0), (-dy).max(0), wide, high);
+        let to = core::Rect::new(dx.max(0), dy.max(0), wide, high);
+        let mut both = Mat::default();
+        let anded = Mat::roi(found, from).and_then(|moved| {
+            let under = Mat::roi(labelled, to)?;
+            core::bitwise_and(&moved, &under, &mut both, &core::no_array())
+        });
+        if anded.is_err() {
+            continue;
+        }
+        let d = 2.0 * count(&both) / (n_found + n_labelled);
+        if d > best.1 {
+            best = ([dx, dy], d);
+        }
+    }
+    best
 }
 
 fn dice(a: &Mat, b: &Mat) -> f64 {
@@ -510,6 +563,7 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
             .iter()
             .map(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px)),
     );
+    let (mask_offset_px, union_dice_at_offset) = best_offset(union_mask, &truth.union_mask);
     let found_lines: Vec<Vec<[f64; 2]>> = cables.iter().map(|c| c.samples_px.clone()).collect();
     let (labelled_length_px, labelled_length_found_px) =
         length_near(&truth.polylines_px, &found_lines);
@@ -530,6 +584,8 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         labelled_length_found_px,
         found_length_px,
         found_length_labelled_px,
+        mask_offset_px,
+        union_dice_at_offset,
     }
 }
 
@@ -727,6 +783,43 @@ mod tests {
             mask: draw_paths(120, 160, &[samples_px.as_slice()], 7).unwrap(),
             samples_px,
         }
+    }
+
+    #[test]
+    fn the_best_offset_moves_a_found_mask_back_onto_its_labels() {
+        let band = |dx: f64, dy: f64| {
+            let line = [
+                [20.0 + dx, 40.0 + dy],
+                [90.0 + dx, 70.0 + dy],
+                [140.0 + dx, 50.0 + dy],
+            ];
+            draw_paths(120, 160, &[line.as_slice()], 5).unwrap()
+        };
+        let labelled = band(0.0, 0.0);
+        let found = band(2.0, -1.0);
+        assert!(dice(&found, &labelled) < 0.9);
+        assert_eq!(best_offset(&found, &labelled), ([-2, 1], 1.0));
+        assert_eq!(best_offset(&labelled, &labelled), ([0, 0], 1.0));
+
+        // Beyond the search, as near as it goes.
+        let level = |dy: f64| {
+            draw_paths(
+                120,
+                160,
+                &[[[20.0, 60.0 + dy], [140.0, 60.0 + dy]].as_slice()],
+                5,
+            )
+            .unwrap()
+        };
+        let (offset, moved_dice) = best_offset(&level(6.0), &level(0.0));
+        assert_eq!(offset, [0, -MASK_OFFSET_SEARCH_PX]);
+        assert!(moved_dice > dice(&level(6.0), &level(0.0)) && moved_dice < 1.0);
+
+        // Nothing to match, and masks that cannot be compared.
+        let empty = super::super::mask::zeros_u8(120, 160).unwrap();
+        assert_eq!(best_offset(&empty, &empty), ([0, 0], 1.0));
+        let other_size = super::super::mask::zeros_u8(60, 80).unwrap();
+        assert_eq!(best_offset(&found, &other_size), ([0, 0], 0.0));
     }
 
     #[test]
