@@ -316,6 +316,21 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     );
 }
 
+/// Scores, as DIR/00000, an image of the `shown` cables against labels
+/// of the `labelled` ones, keeping straight cables: the `eval-vision`
+/// arguments and its JSON report.
+fn eval_labels_over(
+    dir: &Path,
+    labelled: Vec<CableSpec>,
+    shown: Vec<CableSpec>,
+) -> ([&str; 4], serde_json::Value) {
+    write_scene(dir, "00000", labelled, true);
+    write_scene(dir, "00000", shown, false);
+    let args = ["eval-vision", text(dir), "--straight-edge-radius-px", "0"];
+    let e = json_of(&[&args[..], &["--json"]].concat());
+    (args, e)
+}
+
 #[test]
 fn eval_vision_names_the_cables_that_each_side_lacks() {
     // The image shows cables A and B; its labels give A and C, a cable
@@ -324,15 +339,7 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
     let a = cable([80.0, 300.0], [560.0, 420.0]);
     let b = cable([150.0, 250.0], [450.0, 100.0]);
     let c = cable([500.0, 0.0], [600.0, 200.0]);
-    write_scene(dir.path(), "00000", vec![a.clone(), c], true);
-    write_scene(dir.path(), "00000", vec![a, b], false);
-    let args = [
-        "eval-vision",
-        text(dir.path()),
-        "--straight-edge-radius-px",
-        "0",
-    ];
-    let e = json_of(&[&args[..], &["--json"]].concat());
+    let (args, e) = eval_labels_over(dir.path(), vec![a.clone(), c], vec![a, b]);
     let score = &e["per_image"][0][1];
     assert_eq!(score["count_right"], true, "{e}");
     let missed = score["missed"].as_array().expect("missed");
@@ -402,25 +409,8 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
 fn eval_vision_finds_labels_that_lie_beside_their_cables() {
     // The labels lie 2 px above the cable drawn in the image.
     let dir = tempfile::tempdir().expect("tempdir");
-    write_scene(
-        dir.path(),
-        "00000",
-        vec![cable([80.0, 298.0], [560.0, 178.0])],
-        true,
-    );
-    write_scene(
-        dir.path(),
-        "00000",
-        vec![cable([80.0, 300.0], [560.0, 180.0])],
-        false,
-    );
-    let args = [
-        "eval-vision",
-        text(dir.path()),
-        "--straight-edge-radius-px",
-        "0",
-    ];
-    let e = json_of(&[&args[..], &["--json"]].concat());
+    let drawn = |left_y_px: f64| vec![cable([80.0, left_y_px], [560.0, left_y_px - 120.0])];
+    let (args, e) = eval_labels_over(dir.path(), drawn(298.0), drawn(300.0));
     let score = &e["per_image"][0][1];
     assert_eq!(score["mask_offset_px"], serde_json::json!([0, -2]), "{e}");
     let (dice, moved) = (
