@@ -609,6 +609,7 @@ fn print_length_share(
     );
 }
 
+/// A summary as printed: mean, median, 95th percentile and maximum.
 fn summary(s: &Summary) -> String {
     format!(
         "mean {:.3}  median {:.3}  p95 {:.3}  max {:.3}",

@@ -384,9 +384,9 @@ fn overlap(a: &Mat, b: &Mat) -> (f64, f64, f64) {
     (count(&both), count(a), count(b))
 }
 
-/// How far (px, along each axis) [`best_offset`] moves a found mask: a
-/// little more than the 1–4 px by which cables-dev's labels lie beside
-/// their wires.
+/// How far (px, along each axis) [`best_offset`] moves a found mask: as
+/// far as cables-dev's labels mostly lie beside their wires; a cable
+/// found farther from its label is another matter (centre-line distance).
 pub const MASK_OFFSET_SEARCH_PX: i32 = 3;
 
 /// The whole-pixel shift `[dx, dy]`, each within ±[`MASK_OFFSET_SEARCH_PX`],
