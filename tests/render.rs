@@ -8,9 +8,10 @@ use std::path::Path;
 use cablecell::perception::vision::calibration::{
     CalibrationError, CameraModel, MarkerOnFinger, MarkerView, calibrate, calibrate_views,
 };
+use cablecell::perception::vision::paths::polyline_length;
 use cablecell::sim::render::{
-    Appearance, Background, CableSpec, Light, RenderedScene, SceneOptions, SceneSpec,
-    polyline_length, random_scene, render, render_world, write_dataset,
+    Appearance, Background, CableSpec, Light, RenderedScene, SceneOptions, SceneSpec, random_scene,
+    render, render_world, write_dataset,
 };
 use cablecell::sim::world::SimWorld;
 use cablecell::task::cell_file::WorldConfig;

@@ -58,8 +58,8 @@ pub struct FoundPaths {
     pub width_px: f64,
 }
 
-/// Length along `points`.
-pub(super) fn polyline_length(points: &[[f64; 2]]) -> f64 {
+/// Length along `points` (pixels, or whatever unit they are in).
+pub fn polyline_length(points: &[[f64; 2]]) -> f64 {
     points
         .windows(2)
         .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))

@@ -32,6 +32,7 @@ use rand_chacha::ChaCha8Rng;
 pub use random::{BackgroundChoice, SceneOptions, random_scene};
 
 use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
+use crate::perception::vision::paths::polyline_length;
 use crate::sim::world::SimWorld;
 
 /// What the cables lie on. Apart from `Plain`, each kind draws its
@@ -611,14 +612,6 @@ fn clip_segment(a: [f64; 2], b: [f64; 2], max_x: f64, max_y: f64) -> Option<(f64
         }
     }
     (t0 <= t1).then_some((t0, t1))
-}
-
-/// The length of a polyline.
-pub fn polyline_length(points: &[[f64; 2]]) -> f64 {
-    points
-        .windows(2)
-        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-        .sum()
 }
 
 /// The simulated camera's view of the simulated world: the cable (its
