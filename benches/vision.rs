@@ -24,6 +24,9 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     let found =
         skeleton::paths_from_mask(instance_mask, config.min_cable_length_px).expect("paths");
     let mut group = c.benchmark_group(format!("vision/{name}"));
+    group.bench_function("plain-background test", |b| {
+        b.iter(|| mask::background_stats(black_box(image)))
+    });
     group.bench_function("mask (classical)", |b| {
         b.iter(|| {
             let background = mask::background_stats(black_box(image))?;

@@ -127,7 +127,7 @@ fn superpixel_instances_on_true_masks() {
 
 /// The classical mask on the training photographs' white paper and wood
 /// (every third of 00000..00029 keeps the unoptimised test quick). None of
-/// them is plain enough for `auto` to choose it (85 % of the pixels near
+/// them is plain enough for `auto` to choose it (90 % of the pixels near
 /// the background's colour), yet forced, it still finds the wires:
 /// measured union DICE 0.724 and grasp points 2.9 px from the labelled
 /// centre lines on average. The bounds fail on a broken threshold or
