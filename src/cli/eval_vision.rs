@@ -583,9 +583,10 @@ fn print_length_share(
         .iter()
         .filter_map(|(stem, s)| {
             let (length_px, near_px) = side(s);
-            let image_share = near_px / length_px;
-            (length_px > 0.0 && image_share < LOW_LENGTH_SHARE)
-                .then_some((stem.as_str(), image_share))
+            (length_px > 0.0)
+                .then(|| near_px / length_px)
+                .filter(|&image_share| image_share < LOW_LENGTH_SHARE)
+                .map(|image_share| (stem.as_str(), image_share))
         })
         .collect();
     low.sort_by(|a, b| a.1.total_cmp(&b.1));

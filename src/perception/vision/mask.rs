@@ -59,8 +59,8 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 /// "Which background is plain".
 pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 
-/// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`], of the
-/// window whose median colour is the local background: 15 (60 px at full
+/// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],
+/// of the window whose median colour is the local background: 15 (60 px at full
 /// size) is several widths of the thickest cable, so the median is the
 /// table's even beside a cable, and small against a gradient or a light's
 /// falloff.
@@ -300,33 +300,31 @@ pub fn classical_mask(
 /// Opens away speckle, closes pinholes and drops blobs smaller than
 /// `min_blob_area_px`.
 pub fn clean_mask(raw: &Mat, min_blob_area_px: f64) -> Result<Mat, VisionError> {
-    let opened = morphology(raw, imgproc::MORPH_OPEN, 3)?;
-    let closed = morphology(&opened, imgproc::MORPH_CLOSE, 3)?;
-    drop_small_blobs(&closed, min_blob_area_px)
-}
-
-/// `op` (open, close) of a mask with an elliptical `ksize_px` kernel.
-fn morphology(mask: &Mat, op: i32, ksize_px: i32) -> Result<Mat, VisionError> {
     let kernel = imgproc::get_structuring_element(
         imgproc::MORPH_ELLIPSE,
-        Size::new(ksize_px, ksize_px),
+        Size::new(3, 3),
         Point::new(-1, -1),
     )
     .map_err(cv("structuring element"))?;
     let border = imgproc::morphology_default_border_value().map_err(cv("morphology border"))?;
-    let mut out = Mat::default();
-    imgproc::morphology_ex(
-        mask,
-        &mut out,
-        op,
-        &kernel,
-        Point::new(-1, -1),
-        1,
-        core::BORDER_CONSTANT,
-        border,
-    )
-    .map_err(cv("morphology on the mask"))?;
-    Ok(out)
+    let apply = |mask: &Mat, op: i32, what: &'static str| {
+        let mut out = Mat::default();
+        imgproc::morphology_ex(
+            mask,
+            &mut out,
+            op,
+            &kernel,
+            Point::new(-1, -1),
+            1,
+            core::BORDER_CONSTANT,
+            border,
+        )
+        .map_err(cv(what))?;
+        Ok::<_, VisionError>(out)
+    };
+    let opened = apply(raw, imgproc::MORPH_OPEN, "open mask")?;
+    let closed = apply(&opened, imgproc::MORPH_CLOSE, "close mask")?;
+    drop_small_blobs(&closed, min_blob_area_px)
 }
 
 /// Keeps the 8-connected blobs of at least `min_area_px` pixels of a 0/255
