@@ -206,12 +206,8 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
     assert_eq!(e["labels_found"]["rate"], 1.0, "{e}");
     assert_eq!(e["found_labelled"]["rate"], 1.0, "{e}");
     // Exact truth lies where the cables are: no move matches it better.
-    for (_, score) in e["per_image"]
-        .as_array()
-        .expect("per image")
-        .iter()
-        .map(|p| (&p[0], &p[1]))
-    {
+    for image in e["per_image"].as_array().expect("per image") {
+        let score = &image[1];
         assert_eq!(score["mask_offset_px"], serde_json::json!([0, 0]), "{e}");
         assert_eq!(score["union_dice_at_offset"], score["union_dice"], "{e}");
     }

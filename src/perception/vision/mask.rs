@@ -60,10 +60,10 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 
 /// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],
-/// of the window whose median colour is the local background: 15 (60 px at full
-/// size) is several widths of the thickest cable, so the median is the
-/// table's even beside a cable, and small against a gradient or a light's
-/// falloff.
+/// of the window whose median colour is the local background: 15 (60 px
+/// at full size) is several widths of the thickest cable, so the median
+/// is the table's even beside a cable, and small against a gradient or a
+/// light's falloff.
 const LOCAL_BACKGROUND_KSIZE: i32 = 15;
 
 /// The lowest colour distance the classical threshold may take, whatever
