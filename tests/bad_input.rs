@@ -185,6 +185,20 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
 }
 
 #[test]
+fn a_negative_working_width_is_refused_at_its_line() {
+    let (err, path, _dir) = check_cell_error(
+        "straight_edge_radius_px = 0.0",
+        "straight_edge_radius_px = 0.0\nwork_width_px = -640",
+    );
+    let line = line_of(&path, "work_width_px = -640");
+    assert!(err.contains(&format!(":{line}:")), "{err}");
+    assert!(
+        err.contains("work_width_px: invalid value: integer `-640`"),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_negative_straight_edge_radius_is_refused_at_its_line() {
     let (err, path, _dir) = check_cell_error(
         "straight_edge_radius_px = 0.0",

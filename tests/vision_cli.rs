@@ -132,6 +132,47 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
 }
 
 #[test]
+fn detect_works_on_a_finer_image_at_the_working_width() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = draw_scene(
+        960,
+        1280,
+        Background::Plain { bgr: [200; 3] },
+        0.0,
+        vec![matte_cable(
+            segment_px([200.0, 200.0], [1080.0, 760.0]),
+            14.0,
+            [30; 3],
+        )],
+        7,
+    )
+    .expect("scene");
+    let image = dir.path().join("fine.png");
+    assert!(imgcodecs::imwrite(text(&image), &scene.bgr, &Vector::new()).expect("write"));
+    let grasp = |extra: &[&str]| {
+        let mut args = vec![
+            "detect",
+            text(&image),
+            "--json",
+            "--straight-edge-radius-px",
+            "0",
+        ];
+        args.extend_from_slice(extra);
+        let report = json_of(&args)[0].clone();
+        let g = &report["cables"][0]["grasp_px"];
+        let at = [0, 1].map(|i| g[i].as_f64().expect("grasp point"));
+        (report["work_scale"].as_f64().expect("work_scale"), at)
+    };
+    let (shrunk_scale, shrunk) = grasp(&[]);
+    let (own_scale, own) = grasp(&["--work-width-px", "0"]);
+    assert_eq!((shrunk_scale, own_scale), (0.5, 1.0));
+    // Both in the image's pixels, at the cable's middle.
+    for at in [shrunk, own] {
+        assert!((at[0] - 640.0).hypot(at[1] - 480.0) < 3.0, "{at:?}");
+    }
+}
+
+#[test]
 fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
     let dir = tempfile::tempdir().expect("tempdir");
     let empty = write_scene(dir.path(), "empty", Vec::new(), false);

@@ -19,6 +19,8 @@ struct ImageReport<'a> {
     image: String,
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
+    /// The fraction of its size the image was worked on at.
+    work_scale: f64,
     cables: &'a [CableInstance],
     /// Per cable, its grasp frame in the base frame, when the cell's camera
     /// is calibrated.
@@ -117,6 +119,7 @@ pub fn detect(
             image: path.display().to_string(),
             mask_used: output.mask_used,
             plain_background: output.plain_background,
+            work_scale: output.work_scale,
             cables: &output.cables,
             grasp_frames_in_base: output
                 .cables
@@ -173,7 +176,7 @@ fn print_report(report: &ImageReport) {
         .map(|(stage, ms)| format!("{stage} {ms:.1}"))
         .collect();
     println!(
-        "{}: {} cable(s), {:?} mask{}, {:.1} ms ({} ms)",
+        "{}: {} cable(s), {:?} mask{}{}, {:.1} ms ({} ms)",
         report.image,
         report.cables.len(),
         report.mask_used,
@@ -181,6 +184,11 @@ fn print_report(report: &ImageReport) {
             " (plain background)"
         } else {
             ""
+        },
+        if report.work_scale < 1.0 {
+            format!(", worked on at {:.0} % size", 100.0 * report.work_scale)
+        } else {
+            String::new()
         },
         report.total_ms,
         stages.join(", ")

@@ -44,6 +44,12 @@ pub struct VisionArgs {
     /// (smaller: more superpixels).
     #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
     pub superpixel_widths: f64,
+    /// Work on images wider than this (px) shrunk to this width, and scale
+    /// what is found back to the image: the network and the lengths below
+    /// were tuned on 640 px wide images, and the lengths are those of the
+    /// image as worked on. 0 works at the image's own size.
+    #[arg(long, default_value_t = VisionConfig::default().work_width_px)]
+    pub work_width_px: u32,
     /// Drop cables shorter than this (px): scraps of mask.
     #[arg(long, default_value_t = VisionConfig::default().min_cable_length_px, value_parser = length_px)]
     pub min_length_px: f64,
@@ -118,6 +124,7 @@ impl VisionArgs {
                 InstancesArg::Superpixels => InstanceMethod::Superpixels,
             },
             superpixel_widths: self.superpixel_widths,
+            work_width_px: self.work_width_px,
             min_cable_length_px: self.min_length_px,
             min_border_cable_length_px: self.min_border_length_px,
             straight_edge_radius_px: self.straight_edge_radius_px,

@@ -524,6 +524,10 @@ fn default_straight_edge_radius_px() -> f64 {
     VisionConfig::default().straight_edge_radius_px
 }
 
+fn default_work_width_px() -> u32 {
+    VisionConfig::default().work_width_px
+}
+
 fn default_net_scale() -> f64 {
     DEFAULT_INPUT_SCALE
 }
@@ -564,6 +568,10 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
+    /// Images wider than this (px) are worked on shrunk to this width
+    /// (default [`VisionConfig::work_width_px`]; 0: at their own size).
+    #[serde(default = "default_work_width_px")]
+    pub work_width_px: u32,
     /// Detections straighter than an arc of this radius (px), or within
     /// 1.5 px of straight, are dropped as edges of paper and tables (default
     /// [`VisionConfig::straight_edge_radius_px`]); 0 keeps them: a cable
@@ -722,6 +730,7 @@ impl VisionDetectorConfig {
             roi_px: self
                 .roi_px
                 .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
+            work_width_px: self.work_width_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
             ..VisionConfig::default()
         }

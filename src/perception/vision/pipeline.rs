@@ -38,11 +38,19 @@ pub enum InstanceMethod {
     Superpixels,
 }
 
-/// What the pipeline does and where.
+/// What the pipeline does and where. Lengths and areas in px are those
+/// of the image as worked on, at most [`Self::work_width_px`] wide.
 #[derive(Clone, Debug)]
 pub struct VisionConfig {
     pub mask: MaskMethod,
     pub instances: InstanceMethod,
+    /// Images wider than this are worked on shrunk to this width, and what
+    /// is found is scaled back to the image's pixels: the network and the
+    /// lengths here were tuned on 640 px wide images, where a wire is
+    /// about 6 px across, and at a camera's finer resolution they would
+    /// split cables into pieces and take several times as long. 0 works at
+    /// the image's own size.
+    pub work_width_px: u32,
     /// Bound all work to this region when known (the table, the fixture):
     /// it saves time and keeps clutter outside it from becoming cables.
     pub roi_px: Option<Rect>,
@@ -75,6 +83,7 @@ impl Default for VisionConfig {
         VisionConfig {
             mask: MaskMethod::Auto,
             instances: InstanceMethod::Skeleton,
+            work_width_px: 640,
             roi_px: None,
             min_cable_length_px: 40.0,
             min_border_cable_length_px: 80.0,
@@ -134,6 +143,9 @@ pub struct VisionOutput {
     pub union_mask: Mat,
     /// The cables' typical width (mask area over skeleton length).
     pub cable_width_px: f64,
+    /// The fraction of its size the image was worked on at: below 1 for
+    /// images wider than [`VisionConfig::work_width_px`].
+    pub work_scale: f64,
     /// Milliseconds per stage, in order: "prepare", "mask", "instances",
     /// "spline", "instance_masks".
     pub timings_ms: Vec<(&'static str, f64)>,
@@ -214,7 +226,7 @@ impl Pipeline {
                 clipped
             }
         };
-        let work = if roi == full {
+        let cropped = if roi == full {
             image
         } else {
             Cow::Owned(
@@ -223,6 +235,8 @@ impl Pipeline {
                     .map_err(cv("crop to region of interest"))?,
             )
         };
+        let scale = work_scale(full.width, self.config.work_width_px);
+        let work = shrink(cropped, scale)?;
         timings_ms.push(("prepare", ms_since(start)));
 
         let start = Instant::now();
@@ -286,6 +300,7 @@ impl Pipeline {
             background,
             union_mask,
             cable_width_px: found.cable_width_px,
+            work_scale: scale,
             timings_ms,
             notes,
         })
@@ -309,7 +324,9 @@ impl Pipeline {
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
-    /// `image_roi`, region `roi` of an image of extent `full`.
+    /// `image_roi`, region `roi` of an image of extent `full`, perhaps
+    /// shrunk (see [`VisionConfig::work_width_px`]): what is found is given
+    /// in the image's pixels.
     fn cables_in(
         &self,
         image_roi: &Mat,
@@ -348,8 +365,7 @@ impl Pipeline {
         timings_ms.push(("instances", ms_since(start)));
 
         let start = Instant::now();
-        let offset = [f64::from(roi.x), f64::from(roi.y)];
-        let shift = |p: [f64; 2]| [p[0] + offset[0], p[1] + offset[1]];
+        let to_image = ToImage::new(roi, size_px);
         let mut fitted = Vec::new();
         let mut straight_dropped = 0;
         for path in paths {
@@ -357,9 +373,6 @@ impl Pipeline {
             let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
                 continue;
             };
-            for c in &mut spline.control_points_px {
-                *c = shift(*c);
-            }
             let samples_px = spline.sample(self.config.samples_per_cable);
             if looks_like_edge(
                 &samples_px,
@@ -369,6 +382,13 @@ impl Pipeline {
                 straight_dropped += 1;
                 continue;
             }
+            // A B-spline's points move with its control points under an
+            // affine map: the spline fitted in working pixels becomes the
+            // image's by moving them.
+            for c in &mut spline.control_points_px {
+                *c = to_image.point(*c);
+            }
+            let samples_px: Vec<_> = samples_px.into_iter().map(|p| to_image.point(p)).collect();
             let grasp_px = spline.point(0.5);
             let direction_rad = spline.grasp_direction_rad();
             fitted.push((path, spline, samples_px, grasp_px, direction_rad));
@@ -385,19 +405,105 @@ impl Pipeline {
                 samples_px,
                 grasp_px,
                 direction_rad,
-                length_px: path.length_px,
-                mask: place(&own, roi, full)?,
+                length_px: path.length_px * to_image.length_scale(),
+                mask: place(&*enlarge(&own, roi)?, roi, full)?,
             });
         }
         timings_ms.push(("instance_masks", ms_since(start)));
         Ok(MaskInstances {
             cables,
-            cable_width_px: found.width_px,
+            cable_width_px: found.width_px * to_image.length_scale(),
             straight_dropped,
             border_dropped,
             timings_ms,
         })
     }
+}
+
+/// Maps pixels of the image as worked on (the region of interest, perhaps
+/// shrunk) to the full image's pixels, whose centres are at whole
+/// coordinates in both.
+struct ToImage {
+    offset_px: [f64; 2],
+    scale: [f64; 2],
+}
+
+impl ToImage {
+    /// For a region `roi` of the image worked on at `size_px`.
+    fn new(roi: Rect, size_px: [f64; 2]) -> Self {
+        ToImage {
+            offset_px: [f64::from(roi.x), f64::from(roi.y)],
+            scale: [
+                f64::from(roi.width) / size_px[0],
+                f64::from(roi.height) / size_px[1],
+            ],
+        }
+    }
+
+    fn point(&self, p: [f64; 2]) -> [f64; 2] {
+        [0, 1].map(|i| p[i] * self.scale[i] + (self.scale[i] - 1.0) / 2.0 + self.offset_px[i])
+    }
+
+    /// Image pixels per working pixel, for lengths.
+    fn length_scale(&self) -> f64 {
+        (self.scale[0] + self.scale[1]) / 2.0
+    }
+}
+
+/// The fraction of its size an image `width_px` wide is worked on at:
+/// see [`VisionConfig::work_width_px`].
+fn work_scale(width_px: i32, work_width_px: u32) -> f64 {
+    if work_width_px == 0
+        || width_px <= 0
+        || u32::try_from(width_px).is_ok_and(|w| w <= work_width_px)
+    {
+        1.0
+    } else {
+        f64::from(work_width_px) / f64::from(width_px)
+    }
+}
+
+/// `image` shrunk by `scale` (< 1), by area averaging as the network's
+/// input is; unchanged at 1.
+fn shrink(image: Cow<'_, Mat>, scale: f64) -> Result<Cow<'_, Mat>, VisionError> {
+    if scale >= 1.0 {
+        return Ok(image);
+    }
+    let size = |side: i32| ((f64::from(side) * scale).round() as i32).max(1);
+    let mut small = Mat::default();
+    imgproc::resize(
+        &*image,
+        &mut small,
+        core::Size::new(size(image.cols()), size(image.rows())),
+        0.0,
+        0.0,
+        imgproc::INTER_AREA,
+    )
+    .map_err(cv("shrink to the working width"))?;
+    Ok(Cow::Owned(small))
+}
+
+/// A working-size cable mask brought to the size of `roi`: smoothly
+/// enlarged and cut at half, so that its edges follow the cable rather
+/// than the working pixels' steps.
+fn enlarge(mask: &Mat, roi: Rect) -> Result<Cow<'_, Mat>, VisionError> {
+    if (mask.cols(), mask.rows()) == (roi.width, roi.height) {
+        return Ok(Cow::Borrowed(mask));
+    }
+    let mut smooth = Mat::default();
+    imgproc::resize(
+        mask,
+        &mut smooth,
+        roi.size(),
+        0.0,
+        0.0,
+        imgproc::INTER_LINEAR,
+    )
+    .map_err(cv("enlarge a cable's mask"))?;
+    let mut binary = Mat::default();
+    imgproc::threshold(&smooth, &mut binary, 127.0, 255.0, imgproc::THRESH_BINARY)
+        .map_err(cv("enlarge a cable's mask"))?;
+    Ok(Cow::Owned(binary))
 }
 
 /// How far from straight an edge's detection can be: mask noise and lens
@@ -914,6 +1020,83 @@ mod tests {
             Pipeline::new(off).detect(&scene.bgr, None),
             Err(VisionError::RoiOutside { .. })
         ));
+    }
+
+    #[test]
+    fn a_finer_camera_is_worked_on_at_the_working_width_and_mapped_back() {
+        // The crossing scene of 640 × 480 drawn three times as fine: each
+        // working pixel covers 3 × 3 image pixels, centred on the middle one.
+        let fine = |p: [f64; 2]| p.map(|v| 3.0 * v + 1.0);
+        let a = segment_px([60.0, 100.0], [580.0, 380.0]);
+        let b = arc_px([330.0, 560.0], 380.0, -2.4, -0.7);
+        let scene = |k: f64, map: &dyn Fn([f64; 2]) -> [f64; 2]| {
+            let cables = [(&a, [40, 40, 160]), (&b, [30, 30, 30])]
+                .map(|(c, bgr)| matte_cable(c.iter().map(|&p| map(p)).collect(), 8.0 * k, bgr));
+            let size = |side: f64| (side * k) as i32;
+            draw_scene(
+                size(480.0),
+                size(640.0),
+                Background::Plain { bgr: [200; 3] },
+                0.0,
+                cables.to_vec(),
+                2,
+            )
+            .unwrap()
+        };
+        let coarse = detect(&scene(1.0, &|p| p).bgr, keep_straight());
+        let fine_scene = scene(3.0, &fine);
+        let out = detect(&fine_scene.bgr, keep_straight());
+        assert!(
+            (out.work_scale - 1.0 / 3.0).abs() < 1e-9,
+            "{}",
+            out.work_scale
+        );
+        let curves = [&a, &b].map(|c| c.iter().map(|&p| fine(p)).collect::<Vec<_>>());
+        assert_each_followed(&out, &curves, 6.0);
+        assert_same_in_fine_pixels(&out, &coarse, fine);
+        assert!((out.cable_width_px / coarse.cable_width_px - 3.0).abs() < 0.05);
+        for (f, c) in out.cables.iter().zip(&coarse.cables) {
+            assert_eq!(f.mask.size().unwrap(), fine_scene.bgr.size().unwrap());
+            let area_ratio = f64::from(core::count_non_zero(&f.mask).unwrap())
+                / f64::from(core::count_non_zero(&c.mask).unwrap());
+            assert!(
+                (area_ratio - 9.0).abs() < 1.0,
+                "mask area ratio {area_ratio}"
+            );
+        }
+
+        // A region of interest is given in the fine image's pixels.
+        let roi = Rect::new(280, 200, 320, 160);
+        let bounded = |image: &Mat, roi: Rect| {
+            let config = VisionConfig {
+                roi_px: Some(roi),
+                ..keep_straight()
+            };
+            detect(image, config)
+        };
+        let coarse_roi = bounded(&scene(1.0, &|p| p).bgr, roi);
+        let fine_roi = bounded(
+            &fine_scene.bgr,
+            Rect::new(3 * roi.x, 3 * roi.y, 3 * roi.width, 3 * roi.height),
+        );
+        assert!(!coarse_roi.cables.is_empty());
+        assert_same_in_fine_pixels(&fine_roi, &coarse_roi, fine);
+    }
+
+    /// `fine` found what `coarse` did, in the pixels `to_fine` maps to.
+    fn assert_same_in_fine_pixels(
+        fine: &VisionOutput,
+        coarse: &VisionOutput,
+        to_fine: impl Fn([f64; 2]) -> [f64; 2],
+    ) {
+        assert_eq!(fine.cables.len(), coarse.cables.len());
+        for (f, c) in fine.cables.iter().zip(&coarse.cables) {
+            let [x, y] = to_fine(c.grasp_px);
+            let off_px = (f.grasp_px[0] - x).hypot(f.grasp_px[1] - y);
+            assert!(off_px < 0.5, "{:?} vs {:?}", f.grasp_px, [x, y]);
+            assert!(angle_diff_rad(f.direction_rad, c.direction_rad) < 0.01);
+            assert!((f.length_px / c.length_px - 3.0).abs() < 0.05);
+        }
     }
 
     #[test]
