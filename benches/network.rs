@@ -3,7 +3,7 @@
 //! threads, resize the probability up, threshold): what `SegmentationNet::
 //! mask` costs the detector per camera frame, at three input sizes, and
 //! the float network it was quantized from; and the whole pipeline with
-//! it. Uses the first held-out photograph of cables-dev when it lies beside
+//! it, on the image and on the image enlarged to 1280 × 960. Uses the first held-out photograph of cables-dev when it lies beside
 //! the project, else a drawn image. The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
 //! `.setup/onnxruntime/` (run `scripts/setup`).
 
@@ -93,6 +93,28 @@ fn bench(c: &mut Criterion) {
             pipeline
                 .detect(
                     std::hint::black_box(&image),
+                    Some(&mut net as &mut dyn MaskNetwork),
+                )
+                .expect("detect")
+        });
+    });
+    // A camera twice as fine: the image is worked on shrunk to 640 px wide
+    // (`VisionConfig::work_width_px`), what is found mapped back.
+    let mut fine = Mat::default();
+    imgproc::resize(
+        &image,
+        &mut fine,
+        Default::default(),
+        2.0,
+        2.0,
+        imgproc::INTER_CUBIC,
+    )
+    .expect("enlarging the bench image");
+    c.bench_function("whole pipeline 1280x960 (worked on at 640x480)", |b| {
+        b.iter(|| {
+            pipeline
+                .detect(
+                    std::hint::black_box(&fine),
                     Some(&mut net as &mut dyn MaskNetwork),
                 )
                 .expect("detect")
