@@ -260,7 +260,9 @@ proptest! {
                     && (-w..f64::from(mask.rows()) + w).contains(&g[1]),
                 "{:?} outside {}x{} (width {})", g, mask.cols(), mask.rows(), w
             );
-            prop_assert!(cable.length_px >= VisionConfig::default().min_cable_length_px);
+            // The shortest length kept is the working image's.
+            let working_length_px = cable.length_px * out.work_scale;
+            prop_assert!(working_length_px >= VisionConfig::default().min_cable_length_px - 1e-9);
         }
     }
 }

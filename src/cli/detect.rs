@@ -19,7 +19,7 @@ struct ImageReport<'a> {
     image: String,
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
-    /// The fraction of its size the image was worked on at.
+    /// The image's size as worked on over its own.
     work_scale: f64,
     cables: &'a [CableInstance],
     /// Per cable, its grasp frame in the base frame, when the cell's camera
@@ -185,7 +185,7 @@ fn print_report(report: &ImageReport) {
         } else {
             ""
         },
-        if report.work_scale < 1.0 {
+        if report.work_scale != 1.0 {
             format!(", worked on at {:.0} % size", 100.0 * report.work_scale)
         } else {
             String::new()

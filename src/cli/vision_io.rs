@@ -44,10 +44,11 @@ pub struct VisionArgs {
     /// (smaller: more superpixels).
     #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
     pub superpixel_widths: f64,
-    /// Work on images wider than this (px) shrunk to this width, and scale
-    /// what is found back to the image: the network and the lengths below
-    /// were tuned on 640 px wide images, and the lengths are those of the
-    /// image as worked on. 0 works at the image's own size.
+    /// Work on images at this width (px), wider ones shrunk and narrower
+    /// ones enlarged (up to 4 times), and map what is found back to the
+    /// image: the network and the lengths below were tuned on 640 px wide
+    /// images, and the lengths are those of the image as worked on. 0 works
+    /// at the image's own size.
     #[arg(long, default_value_t = VisionConfig::default().work_width_px)]
     pub work_width_px: u32,
     /// Drop cables shorter than this (px): scraps of mask.

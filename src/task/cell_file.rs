@@ -568,7 +568,7 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
-    /// Images wider than this (px) are worked on shrunk to this width
+    /// Images are worked on at this width (px), shrunk or enlarged
     /// (default [`VisionConfig::work_width_px`]; 0: at their own size).
     #[serde(default = "default_work_width_px")]
     pub work_width_px: u32,
