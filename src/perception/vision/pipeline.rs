@@ -422,7 +422,7 @@ impl Pipeline {
 }
 
 /// Maps pixels of the image as worked on (the region of interest, perhaps
-/// shrunk) to the full image's pixels, whose centres are at whole
+/// resized) to the full image's pixels, whose centres are at whole
 /// coordinates in both.
 struct ToImage {
     offset_px: [f64; 2],
@@ -451,9 +451,9 @@ impl ToImage {
     }
 }
 
-/// The most an image is enlarged to reach the working width: a camera's
-/// image is never narrower than a quarter of 640 px, and a long thin
-/// strip enlarged without bound would fill the memory.
+/// The most an image is enlarged to reach the working width: enough for a
+/// camera 160 px wide, and a bound on the memory a thin strip of an image
+/// would take.
 pub const MAX_ENLARGEMENT: f64 = 4.0;
 
 /// The image's size as worked on over its own, for an image `width_px`
@@ -1032,14 +1032,13 @@ mod tests {
     #[test]
     fn finer_and_coarser_cameras_are_worked_on_at_the_working_width_and_mapped_back() {
         // The crossing scene of 640 × 480, and the same drawn `k` times as
-        // fine: pixel centres lie at whole coordinates in both, so a point
-        // p of the 640 px image is at k p + (k - 1) / 2 in the other.
+        // fine (3) or as coarse (0.5).
         let a = segment_px([60.0, 100.0], [580.0, 380.0]);
         let b = arc_px([330.0, 560.0], 380.0, -2.4, -0.7);
-        let to_k = |k: f64| move |p: [f64; 2]| p.map(|v| k * v + (k - 1.0) / 2.0);
         let scene = |k: f64| {
-            let cables = [(&a, [40, 40, 160]), (&b, [30, 30, 30])]
-                .map(|(c, bgr)| matte_cable(c.iter().map(|&p| to_k(k)(p)).collect(), 8.0 * k, bgr));
+            let cables = [(&a, [40, 40, 160]), (&b, [30, 30, 30])].map(|(c, bgr)| {
+                matte_cable(c.iter().map(|&p| at_scale(p, k)).collect(), 8.0 * k, bgr)
+            });
             let size = |side: f64| (side * k) as i32;
             draw_scene(
                 size(480.0),
@@ -1073,7 +1072,7 @@ mod tests {
                 "{}",
                 out.work_scale
             );
-            let curves = [&a, &b].map(|c| c.iter().map(|&p| to_k(k)(p)).collect::<Vec<_>>());
+            let curves = [&a, &b].map(|c| c.iter().map(|&p| at_scale(p, k)).collect::<Vec<_>>());
             assert_each_followed(&out, &curves, 2.0 * k);
             assert_found_alike(&out, &at_640, k);
             assert!((out.cable_width_px / at_640.cable_width_px - k).abs() < 0.05 * k);
@@ -1098,12 +1097,18 @@ mod tests {
         }
     }
 
+    /// Point `p` of a 640 px wide image in the same image drawn `k` times
+    /// as fine: pixel centres lie at whole coordinates in both.
+    fn at_scale(p: [f64; 2], k: f64) -> [f64; 2] {
+        p.map(|v| k * v + (k - 1.0) / 2.0)
+    }
+
     /// `found`, in an image `k` times as fine as 640 px wide, is what
     /// `working` found at 640 px wide, in that image's pixels.
     fn assert_found_alike(found: &VisionOutput, working: &VisionOutput, k: f64) {
         assert_eq!(found.cables.len(), working.cables.len());
         for (f, w) in found.cables.iter().zip(&working.cables) {
-            let [x, y] = w.grasp_px.map(|v| k * v + (k - 1.0) / 2.0);
+            let [x, y] = at_scale(w.grasp_px, k);
             let off_px = (f.grasp_px[0] - x).hypot(f.grasp_px[1] - y);
             // Within a fifth of a working pixel; a coarser image holds less
             // than the working one, within half its own pixel.
