@@ -3,9 +3,10 @@
 //! threads, resize the probability up, threshold): what `SegmentationNet::
 //! mask` costs the detector per camera frame, at three input sizes, and
 //! the float network it was quantized from; and the whole pipeline with
-//! it, on the image and on the image enlarged to 1280 × 960. Uses the first held-out photograph of cables-dev when it lies beside
-//! the project, else a drawn image. The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
-//! `.setup/onnxruntime/` (run `scripts/setup`).
+//! it, on the image and on the image enlarged to 1280 × 960. Uses the
+//! first held-out photograph of cables-dev when it lies beside the
+//! project, else a drawn image. The ONNX Runtime library comes from
+//! `ORT_DYLIB_PATH`, else from `.setup/onnxruntime/` (run `scripts/setup`).
 
 use std::path::{Path, PathBuf};
 

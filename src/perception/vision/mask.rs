@@ -399,22 +399,32 @@ pub fn binarize_network_mask(raw: &Mat, size: Size) -> Result<Mat, VisionError> 
         core::CV_32F => 0.5,
         _ => return Err(bad()),
     };
-    let resized = if raw.size().map_err(cv("network mask size"))? == size {
-        raw.try_clone().map_err(cv("copy network mask"))?
-    } else {
-        let mut out = Mat::default();
-        imgproc::resize(raw, &mut out, size, 0.0, 0.0, imgproc::INTER_LINEAR)
-            .map_err(cv("resize network mask"))?;
-        out
-    };
-    let mut binary = Mat::default();
-    imgproc::threshold(&resized, &mut binary, cut, 255.0, imgproc::THRESH_BINARY)
-        .map_err(cv("binarize network mask"))?;
+    let binary = resize_and_cut(raw, size, cut)?;
     let mut out = Mat::default();
     binary
         .convert_to(&mut out, core::CV_8U, 1.0, 0.0)
         .map_err(cv("network mask to 8-bit"))?;
     Ok(out)
+}
+
+/// `mask` resized bilinearly to `size` (when it is not that size already)
+/// and cut: 255 above `cut`, 0 elsewhere, in `mask`'s depth. Bilinear
+/// resizing then cutting at half keeps a mask's edges smooth.
+pub fn resize_and_cut(mask: &Mat, size: Size, cut: f64) -> Result<Mat, VisionError> {
+    let resized;
+    let source = if mask.size().map_err(cv("mask size"))? == size {
+        mask
+    } else {
+        let mut out = Mat::default();
+        imgproc::resize(mask, &mut out, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+            .map_err(cv("resize mask"))?;
+        resized = out;
+        &resized
+    };
+    let mut binary = Mat::default();
+    imgproc::threshold(source, &mut binary, cut, 255.0, imgproc::THRESH_BINARY)
+        .map_err(cv("binarize mask"))?;
+    Ok(binary)
 }
 
 /// A CV_8U mask of `rows`×`cols` with every pixel 0.

@@ -490,27 +490,13 @@ fn to_work_size(image: Cow<'_, Mat>, scale: f64) -> Result<Cow<'_, Mat>, VisionE
     Ok(Cow::Owned(resized))
 }
 
-/// A working-size cable mask brought to the size of `roi`: resized
-/// smoothly and cut at half, so that its edges follow the cable rather
-/// than the working pixels' steps.
+/// A working-size cable mask brought to the size of `roi`, its edges
+/// following the cable rather than the working pixels' steps.
 fn to_image_size(mask: &Mat, roi: Rect) -> Result<Cow<'_, Mat>, VisionError> {
     if (mask.cols(), mask.rows()) == (roi.width, roi.height) {
         return Ok(Cow::Borrowed(mask));
     }
-    let mut smooth = Mat::default();
-    imgproc::resize(
-        mask,
-        &mut smooth,
-        roi.size(),
-        0.0,
-        0.0,
-        imgproc::INTER_LINEAR,
-    )
-    .map_err(cv("resize a cable's mask to the image"))?;
-    let mut binary = Mat::default();
-    imgproc::threshold(&smooth, &mut binary, 127.0, 255.0, imgproc::THRESH_BINARY)
-        .map_err(cv("resize a cable's mask to the image"))?;
-    Ok(Cow::Owned(binary))
+    mask::resize_and_cut(mask, roi.size(), 127.0).map(Cow::Owned)
 }
 
 /// How far from straight an edge's detection can be: mask noise and lens
