@@ -70,6 +70,15 @@ const LOCAL_BACKGROUND_KSIZE: i32 = 15;
 /// Otsu says: below it two shades of one plain table would be split.
 const MIN_THRESHOLD_LAB: f64 = 12.0;
 
+/// Above this [`BackgroundStats::ambiguous_ratio`], the classical mask is
+/// not trusted even on a plain background, and `auto` runs the network
+/// instead. A cable whose colour is close to the table's (or whose
+/// highlight is) puts many pixels near the threshold, and the threshold
+/// then cuts it into two strips along its flanks or leaves out pieces;
+/// shadows and blur do the same. Where cable and table differ clearly,
+/// few pixels fall between them.
+pub const MAX_AMBIGUOUS_RATIO: f64 = 0.35;
+
 /// What the classical mask learnt about the background.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct BackgroundStats {
@@ -84,6 +93,10 @@ pub struct BackgroundStats {
     /// The colour distance the mask was thresholded at (0 when only the
     /// background was estimated).
     pub threshold_lab: f64,
+    /// Pixels whose colour distance lies from half the threshold up to it,
+    /// per pixel above it (0 when only the background was estimated): see
+    /// [`MAX_AMBIGUOUS_RATIO`].
+    pub ambiguous_ratio: f64,
 }
 
 /// Brings any supported image to 8-bit, 3-channel BGR, so the later stages
@@ -217,6 +230,7 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
         near_fraction,
         plain: near_fraction >= PLAIN_MIN_FRACTION,
         threshold_lab: 0.0,
+        ambiguous_ratio: 0.0,
     })
 }
 
@@ -280,8 +294,18 @@ pub fn classical_mask(
     )
     .map_err(cv("Otsu threshold"))?;
     let threshold_lab = otsu.max(MIN_THRESHOLD_LAB);
+    let (mut ambiguous, mut above) = (0_usize, 0_usize);
+    for &d in &distance {
+        let d = f64::from(d);
+        if d > threshold_lab {
+            above += 1;
+        } else if d >= 0.5 * threshold_lab {
+            ambiguous += 1;
+        }
+    }
     let stats = BackgroundStats {
         threshold_lab,
+        ambiguous_ratio: ambiguous as f64 / above.max(1) as f64,
         ..background.clone()
     };
     let mut raw = Mat::default();

@@ -18,7 +18,8 @@ use super::spline::{self, BSpline};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MaskMethod {
-    /// The classical threshold when the background is plain, else the
+    /// The classical threshold when the background is plain and the
+    /// threshold clear-cut (see [`mask::MAX_AMBIGUOUS_RATIO`]), else the
     /// network (or, with no network, the classical threshold with a note).
     Auto,
     /// Colour distance from the background, Otsu, morphology.
@@ -192,8 +193,9 @@ impl Pipeline {
     /// Finds the cables in a BGR image (gray, BGRA and 16-bit are accepted
     /// and converted). `network`: how to get a network mask when the
     /// configuration asks for one; without it `Network` is
-    /// [`VisionError::NoNetwork`] and `Auto` on a busy background falls back
-    /// to the classical mask, saying so in the notes.
+    /// [`VisionError::NoNetwork`] and `Auto` on a busy background (or an
+    /// ambiguous threshold) falls back to the classical mask, saying so in
+    /// the notes.
     pub fn detect(
         &mut self,
         bgr: &Mat,
@@ -242,24 +244,23 @@ impl Pipeline {
 
         let start = Instant::now();
         let background = mask::background_stats(&work)?;
-        let want_network = match self.config.mask {
-            MaskMethod::Classical => false,
-            MaskMethod::Network => true,
-            MaskMethod::Auto => !background.plain,
+        let network_mask = |net: &mut dyn MaskNetwork| -> Result<Mat, VisionError> {
+            let raw = net.mask(&work)?;
+            let size = work.size().map_err(cv("image size"))?;
+            let binary = mask::binarize_network_mask(&raw, size)?;
+            mask::clean_mask(&binary, self.config.min_blob_area_px)
         };
-        let (mask_roi, mask_used, background) = match (want_network, network) {
-            (true, Some(net)) => {
-                let raw = net.mask(&work)?;
-                let size = work.size().map_err(cv("image size"))?;
-                let binary = mask::binarize_network_mask(&raw, size)?;
-                let cleaned = mask::clean_mask(&binary, self.config.min_blob_area_px)?;
-                (cleaned, MaskMethod::Network, background)
+        let (mask_roi, mask_used, background) = match (self.config.mask, network) {
+            (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
+            (MaskMethod::Network, Some(net)) => {
+                (network_mask(net)?, MaskMethod::Network, background)
             }
-            (true, None) if self.config.mask == MaskMethod::Network => {
-                return Err(VisionError::NoNetwork);
+            (MaskMethod::Auto, Some(net)) if !background.plain => {
+                (network_mask(net)?, MaskMethod::Network, background)
             }
-            (true, None) | (false, _) => {
-                if want_network {
+            (method, network) => {
+                let auto = method == MaskMethod::Auto;
+                if auto && !background.plain {
                     notes.push(format!(
                         "background not plain ({:.0}% of pixels near its colour, plain needs {:.0}%) and no network given: used the classical mask, expect clutter in it",
                         100.0 * background.near_fraction,
@@ -268,7 +269,26 @@ impl Pipeline {
                 }
                 let (m, stats) =
                     mask::classical_mask(&work, &background, self.config.min_blob_area_px)?;
-                (m, MaskMethod::Classical, stats)
+                let ambiguous = auto && stats.ambiguous_ratio > mask::MAX_AMBIGUOUS_RATIO;
+                let why = format!(
+                    "plain background, but the classical threshold was ambiguous ({:.2} pixels near it per pixel above it, trusted up to {:.2})",
+                    stats.ambiguous_ratio,
+                    mask::MAX_AMBIGUOUS_RATIO
+                );
+                match network {
+                    Some(net) if ambiguous => {
+                        notes.push(format!("{why}: used the network"));
+                        (network_mask(net)?, MaskMethod::Network, stats)
+                    }
+                    _ => {
+                        if ambiguous {
+                            notes.push(format!(
+                                "{why} and no network given: used the classical mask, expect cables cut along their length or in pieces"
+                            ));
+                        }
+                        (m, MaskMethod::Classical, stats)
+                    }
+                }
             }
         };
         timings_ms.push(("mask", ms_since(start)));
@@ -1301,6 +1321,72 @@ mod tests {
             network_only.detect(&scene.bgr, None),
             Err(VisionError::NoNetwork)
         ));
+    }
+
+    #[test]
+    fn an_ambiguous_threshold_on_a_plain_table_takes_the_network() {
+        // A glossy cable a little darker than the table: its highlight is
+        // the table's colour, so the threshold cuts it into two strips.
+        let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+        let scene_with = |bgr: [u8; 3], gloss: f64| {
+            let glossy = CableSpec {
+                centerline_px: curve.clone(),
+                diameter_px: 10.0,
+                bgr,
+                gloss,
+            };
+            draw_scene(
+                480,
+                640,
+                Background::Plain { bgr: [200; 3] },
+                2.0,
+                vec![glossy],
+                7,
+            )
+            .unwrap()
+        };
+        let pale = scene_with([185, 175, 165], 1.0);
+        let mut auto = Pipeline::new(keep_straight());
+
+        let mut net = KnownMask(pale.union_mask.clone());
+        let out = auto.detect(&pale.bgr, Some(&mut net)).unwrap();
+        assert!(out.plain_background, "{:?}", out.background);
+        assert!(
+            out.background.ambiguous_ratio > mask::MAX_AMBIGUOUS_RATIO,
+            "{:?}",
+            out.background
+        );
+        assert_eq!(out.mask_used, MaskMethod::Network);
+        assert!(
+            out.notes.iter().any(|n| n.contains("ambiguous")),
+            "{:?}",
+            out.notes
+        );
+        assert_each_followed(&out, std::slice::from_ref(&curve), 2.0);
+
+        // Without a network the classical mask runs, says so, and here
+        // finds the cable's two flanks.
+        let out = auto.detect(&pale.bgr, None).unwrap();
+        assert_eq!(out.mask_used, MaskMethod::Classical);
+        assert!(
+            out.notes.iter().any(|n| n.contains("no network")),
+            "{:?}",
+            out.notes
+        );
+        assert_eq!(out.cables.len(), 2);
+
+        // A dark matte cable on the same table is cut cleanly: the network
+        // is skipped.
+        let dark = scene_with([30; 3], 0.0);
+        let mut net = KnownMask(dark.union_mask.clone());
+        let out = auto.detect(&dark.bgr, Some(&mut net)).unwrap();
+        assert!(
+            out.background.ambiguous_ratio < mask::MAX_AMBIGUOUS_RATIO,
+            "{:?}",
+            out.background
+        );
+        assert_eq!(out.mask_used, MaskMethod::Classical);
+        assert_each_followed(&out, &[curve], 2.0);
     }
 
     #[test]
