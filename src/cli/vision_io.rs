@@ -20,8 +20,8 @@ use opencv::{imgcodecs, imgproc};
 #[derive(Args, Debug, Clone)]
 pub struct VisionArgs {
     /// How to find the cables' pixels: `auto` uses the classical mask on a
-    /// plain background when its threshold is clear-cut, and the network
-    /// otherwise.
+    /// plain background unless that mask is in doubt (the notes say why),
+    /// and the network otherwise.
     #[arg(long, value_enum, default_value = "auto")]
     pub mask: MaskArg,
     /// How to split the mask into cables.

@@ -548,8 +548,8 @@ fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VisionDetectorConfig {
-    /// `auto` (classical on a plain background when its threshold is
-    /// clear-cut, else the network),
+    /// `auto` (classical on a plain background unless that mask is in
+    /// doubt, else the network),
     /// `classical` or `network`.
     pub mask: MaskMethod,
     /// `skeleton` or `superpixels` (the paper's).
