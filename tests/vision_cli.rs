@@ -326,6 +326,12 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{e}"
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
+    // Dark cables on a plain table: the classical mask, clean, on both.
+    assert_eq!(
+        e["mask_used"],
+        serde_json::json!({"classical": 2, "network": 0}),
+        "{e}"
+    );
     assert_eq!(e["notes"].as_array().map(Vec::len), Some(0), "{e}");
     for side in ["labelled_length_found", "found_length_labelled"] {
         assert!(e[side]["share"].as_f64().expect("share") > 0.97, "{e}");

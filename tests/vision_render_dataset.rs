@@ -198,6 +198,11 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         .map(|p| p[0].as_str().expect("stem"))
         .collect();
     assert_eq!(stems, ["00001", "00002"]);
+    assert_eq!(
+        e["mask_used"],
+        serde_json::json!({"classical": 2, "network": 0}),
+        "{e}"
+    );
     // Exact ground truth and plain backgrounds: the classical mask matches,
     // and each labelled cable is one found.
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");

@@ -9,7 +9,7 @@ use cablecell::perception::vision::eval::{
     label_consistency, score,
 };
 use cablecell::perception::vision::network::FLOAT_MODEL;
-use cablecell::perception::vision::{MaskNetwork, VisionOutput};
+use cablecell::perception::vision::{MaskMethod, MaskNetwork, VisionOutput};
 use clap::Args;
 use opencv::core::{Mat, Point, Scalar};
 use opencv::imgproc;
@@ -81,9 +81,18 @@ struct Evaluation {
     #[serde(skip)]
     total_ms: Vec<f64>,
     per_image: Vec<(String, ImageScore)>,
+    /// How many images each mask ran on: `auto` chooses per image.
+    mask_used: MaskUse,
     /// What the pipeline said about an image (fallbacks taken, detections
     /// dropped as edges or as cables too little in view), by image.
     notes: Vec<(String, String)>,
+}
+
+/// Images by the mask that ran on them.
+#[derive(Serialize, Default)]
+struct MaskUse {
+    classical: usize,
+    network: usize,
 }
 
 /// The labels' own union DICE: their centre lines drawn `width_px` wide
@@ -240,6 +249,7 @@ fn evaluate(
     let mut network = vision.network();
     let mut per_image = Vec::new();
     let mut notes = Vec::new();
+    let mut mask_used = MaskUse::default();
     let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     for (k, sample) in samples.iter().enumerate() {
         if k == 0 {
@@ -264,6 +274,10 @@ fn evaluate(
             write_png(&dir.join(format!("{}.png", sample.stem)), &drawn)?;
         }
         per_image.push((sample.stem.clone(), image_score));
+        match output.mask_used {
+            MaskMethod::Network => mask_used.network += 1,
+            _ => mask_used.classical += 1,
+        }
         notes.extend(
             output
                 .notes
@@ -301,6 +315,7 @@ fn evaluate(
             .collect(),
         total_ms: stage_ms.remove("total").unwrap_or_default(),
         per_image,
+        mask_used,
         notes,
     })
 }
@@ -691,6 +706,10 @@ fn print_evaluation(dir: &Path, report: &Report) {
     );
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);
+    println!(
+        "  {:<22} classical in {}, network in {} of the images",
+        "mask used", e.mask_used.classical, e.mask_used.network
+    );
     for (stage, s) in &e.stage_ms {
         println!(
             "  {:<22} median {:.2} ms  p95 {:.2} ms",
