@@ -269,7 +269,7 @@ impl Pipeline {
                 }
                 let (m, stats) =
                     mask::classical_mask(&work, &background, self.config.min_blob_area_px)?;
-                let doubt = stats.classical_doubt().filter(|_| auto);
+                let doubt = stats.classical_doubt().filter(|_| auto && stats.plain);
                 match (doubt, network) {
                     (Some(why), Some(net)) => {
                         notes.push(format!("plain background, but {why}: used the network"));
@@ -1304,6 +1304,14 @@ mod tests {
         assert_eq!(out.mask_used, MaskMethod::Classical);
         assert!(
             out.notes.iter().any(|n| n.contains("no network")),
+            "{:?}",
+            out.notes
+        );
+        // The classical mask is in doubt on wood, but the note that says
+        // so is for plain tables.
+        assert!(out.background.classical_doubt().is_some());
+        assert!(
+            !out.notes.iter().any(|n| n.contains("plain background")),
             "{:?}",
             out.notes
         );
