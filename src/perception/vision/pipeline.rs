@@ -19,7 +19,7 @@ use super::spline::{self, BSpline};
 #[serde(rename_all = "snake_case")]
 pub enum MaskMethod {
     /// The classical threshold when the background is plain and its mask
-    /// not in doubt (see [`BackgroundStats::classical_doubt`]), else the
+    /// not in doubt (see [`mask::classical_doubt`]), else the
     /// network (or, with no network, the classical threshold with a note).
     Auto,
     /// Colour distance from the background, Otsu, morphology.
@@ -269,7 +269,11 @@ impl Pipeline {
                 }
                 let (m, stats) =
                     mask::classical_mask(&work, &background, self.config.min_blob_area_px)?;
-                let doubt = stats.classical_doubt().filter(|_| auto && stats.plain);
+                let doubt = if auto && stats.plain {
+                    mask::classical_doubt(&m, &stats)?
+                } else {
+                    None
+                };
                 match (doubt, network) {
                     (Some(why), Some(net)) => {
                         notes.push(format!("plain background, but {why}: used the network"));
@@ -1309,7 +1313,7 @@ mod tests {
         );
         // The classical mask is in doubt on wood, but the note that says
         // so is for plain tables.
-        assert!(out.background.classical_doubt().is_some());
+        assert!(out.background.ambiguous_ratio > mask::MAX_AMBIGUOUS_RATIO);
         assert!(
             !out.notes.iter().any(|n| n.contains("plain background")),
             "{:?}",
@@ -1379,12 +1383,7 @@ mod tests {
         let dark = scene_with([30; 3], 0.0, 10.0);
         let mut net = KnownMask(dark.union_mask.clone());
         let out = auto.detect(&dark.bgr, Some(&mut net)).unwrap();
-        assert!(
-            out.background.classical_doubt().is_none(),
-            "{:?}",
-            out.background
-        );
-        assert_eq!(out.mask_used, MaskMethod::Classical);
+        assert_eq!(out.mask_used, MaskMethod::Classical, "{:?}", out.notes);
         assert_each_followed(&out, &[curve], 2.0);
     }
 
