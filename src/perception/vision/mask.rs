@@ -353,7 +353,7 @@ pub fn hollow_ratio(mask: &Mat) -> Result<f64, VisionError> {
 pub fn classical_doubt(mask: &Mat, stats: &BackgroundStats) -> Result<Option<String>, VisionError> {
     if stats.ambiguous_ratio > MAX_AMBIGUOUS_RATIO {
         return Ok(Some(format!(
-            "the classical threshold was ambiguous ({:.2} pixels near it per pixel above it, trusted up to {MAX_AMBIGUOUS_RATIO})",
+            "the classical threshold was ambiguous ({:.3} pixels near it per pixel above it, trusted up to {MAX_AMBIGUOUS_RATIO})",
             stats.ambiguous_ratio
         )));
     }
