@@ -79,17 +79,17 @@ const MIN_THRESHOLD_LAB: f64 = 12.0;
 /// few pixels fall between them.
 pub const MAX_AMBIGUOUS_RATIO: f64 = 0.35;
 
-/// Side of the closing that measures [`hollow_ratio`]:
-/// wide enough to bridge the band of table-coloured shading that runs
-/// along a thick glossy cable, narrow against the gaps between cables.
+/// Side of the closing that measures [`hollow_ratio`]: wide enough to
+/// bridge the band of table-coloured shading that runs along a thick
+/// glossy cable, narrow against the gaps between cables.
 const HOLLOW_CLOSE_PX: i32 = 7;
 
-/// Above this [`hollow_ratio`], the classical mask is not
-/// trusted even on a plain background. A thick cable whose shading passes
-/// through the table's colour is cut into two strips with a thin band of
-/// table between them, which a closing fills; on rendered plain tables
-/// the wedges of crossings add under 3.5 % (once 4.7 %), and hollow
-/// cables about 10 %.
+/// Above this [`hollow_ratio`], the classical mask is not trusted even
+/// on a plain background. A thick cable whose shading passes through the
+/// table's colour is cut into two strips with a thin band of table
+/// between them, which a closing fills; on rendered plain tables the
+/// wedges of crossings add under 3.5 % (once 4.7 %), and hollow cables
+/// about 10 %.
 pub const MAX_HOLLOW_RATIO: f64 = 0.04;
 
 /// What the classical mask learnt about the background.
@@ -510,20 +510,26 @@ pub fn zeros_u8(rows: i32, cols: i32) -> Result<Mat, VisionError> {
 mod tests {
     use super::*;
 
-    fn plain_with_line(bg: f64, fg: f64) -> Mat {
+    /// A 160 × 120 table of gray `bg` with a line of gray `fg` across its
+    /// middle.
+    fn plain_with_line(bg: f64, fg: f64, thickness_px: i32) -> Mat {
         let mut img =
             Mat::new_rows_cols_with_default(120, 160, core::CV_8UC3, Scalar::all(bg)).unwrap();
+        draw_middle_line(&mut img, fg, thickness_px);
+        img
+    }
+
+    fn draw_middle_line(img: &mut Mat, gray: f64, thickness_px: i32) {
         imgproc::line(
-            &mut img,
+            img,
             Point::new(10, 60),
             Point::new(150, 60),
-            Scalar::all(fg),
-            6,
+            Scalar::all(gray),
+            thickness_px,
             imgproc::LINE_8,
             0,
         )
         .unwrap();
-        img
     }
 
     #[test]
@@ -560,7 +566,7 @@ mod tests {
 
     #[test]
     fn a_dark_line_on_a_light_plain_table_is_found() {
-        let img = plain_with_line(220.0, 30.0);
+        let img = plain_with_line(220.0, 30.0, 6);
         let (mask, stats) = classical_mask(&img, &background_stats(&img).unwrap(), 20.0).unwrap();
         assert!(stats.plain, "{stats:?}");
         let on = *mask.at_2d::<u8>(60, 80).unwrap();
@@ -570,21 +576,7 @@ mod tests {
 
     #[test]
     fn a_cable_cut_into_two_strips_is_hollow_a_whole_one_is_not() {
-        let band = |img: &mut Mat, thickness_px: i32, gray: f64| {
-            imgproc::line(
-                img,
-                Point::new(10, 60),
-                Point::new(150, 60),
-                Scalar::all(gray),
-                thickness_px,
-                imgproc::LINE_8,
-                0,
-            )
-            .unwrap();
-        };
-        let mut whole =
-            Mat::new_rows_cols_with_default(120, 160, core::CV_8UC3, Scalar::all(220.0)).unwrap();
-        band(&mut whole, 12, 30.0);
+        let whole = plain_with_line(220.0, 30.0, 12);
         let (mask, stats) =
             classical_mask(&whole, &background_stats(&whole).unwrap(), 20.0).unwrap();
         assert!(hollow_ratio(&mask).unwrap() < MAX_HOLLOW_RATIO);
@@ -592,7 +584,7 @@ mod tests {
 
         // The same cable with a band of the table's colour along its middle.
         let mut strips = whole.clone();
-        band(&mut strips, 2, 220.0);
+        draw_middle_line(&mut strips, 220.0, 2);
         let (mask, stats) =
             classical_mask(&strips, &background_stats(&strips).unwrap(), 20.0).unwrap();
         assert_eq!(*mask.at_2d::<u8>(60, 80).unwrap(), 0);
