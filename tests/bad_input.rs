@@ -176,35 +176,38 @@ fn check_accepts_the_shipped_files() {
     );
 }
 
+/// Checks that the shipped simulated cell with `from` replaced by `to` is
+/// refused at the line of `to`'s last line, with `message`.
+fn assert_cell_refused_at_its_line(from: &str, to: &str, message: &str) {
+    let (err, path, _dir) = check_cell_error(from, to);
+    let line = line_of(&path, to.lines().last().expect("a line"));
+    assert!(err.contains(&format!(":{line}:")), "{err}");
+    assert!(err.contains(message), "{err}");
+}
+
 #[test]
 fn a_network_input_size_out_of_range_is_refused_at_its_line() {
-    let (err, path, _dir) = check_cell_error("net_scale = 0.5", "net_scale = 3.0");
-    let line = line_of(&path, "net_scale = 3.0");
-    assert!(err.contains(&format!(":{line}:")), "{err}");
-    assert!(err.contains("net_scale 3 is outside (0, 2]"), "{err}");
+    assert_cell_refused_at_its_line(
+        "net_scale = 0.5",
+        "net_scale = 3.0",
+        "net_scale 3 is outside (0, 2]",
+    );
 }
 
 #[test]
 fn a_negative_working_width_is_refused_at_its_line() {
-    let (err, path, _dir) = check_cell_error(
+    assert_cell_refused_at_its_line(
         "straight_edge_radius_px = 0.0",
         "straight_edge_radius_px = 0.0\nwork_width_px = -640",
-    );
-    let line = line_of(&path, "work_width_px = -640");
-    assert!(err.contains(&format!(":{line}:")), "{err}");
-    assert!(
-        err.contains("work_width_px: invalid value: integer `-640`"),
-        "{err}"
+        "work_width_px: invalid value: integer `-640`",
     );
 }
 
 #[test]
 fn a_negative_straight_edge_radius_is_refused_at_its_line() {
-    let (err, path, _dir) = check_cell_error(
+    assert_cell_refused_at_its_line(
         "straight_edge_radius_px = 0.0",
         "straight_edge_radius_px = -1.0",
+        "expected a number ≥ 0, found -1",
     );
-    let line = line_of(&path, "straight_edge_radius_px = -1.0");
-    assert!(err.contains(&format!(":{line}:")), "{err}");
-    assert!(err.contains("expected a number ≥ 0, found -1"), "{err}");
 }
