@@ -22,7 +22,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
         mask::classical_mask(image, &background, config.min_blob_area_px).expect("classical mask");
     let instance_mask = truth_mask.unwrap_or(&m);
     let found =
-        skeleton::paths_from_mask(instance_mask, config.min_cable_length_px).expect("paths");
+        skeleton::paths_from_mask(instance_mask, None, config.min_cable_length_px).expect("paths");
     let mut group = c.benchmark_group(format!("vision/{name}"));
     group.bench_function("plain-background test", |b| {
         b.iter(|| mask::background_stats(black_box(image)))
@@ -34,7 +34,9 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
         })
     });
     group.bench_function("instances (skeleton)", |b| {
-        b.iter(|| skeleton::paths_from_mask(black_box(instance_mask), config.min_cable_length_px))
+        b.iter(|| {
+            skeleton::paths_from_mask(black_box(instance_mask), None, config.min_cable_length_px)
+        })
     });
     group.bench_function("spline", |b| {
         b.iter(|| {

@@ -170,7 +170,7 @@ fn a_mask_that_fills_its_image_or_a_thin_strip_gives_no_cable() {
             "{rows}x{cols}: {}",
             by_superpixels.width_px
         );
-        let by_skeleton = skeleton::paths_from_mask(&mask, MIN_LENGTH_PX).unwrap();
+        let by_skeleton = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX).unwrap();
         assert!(by_skeleton.paths.len() <= 1, "{rows}x{cols}");
     }
 }
@@ -181,7 +181,7 @@ proptest! {
     #[test]
     fn skeleton_paths_are_well_formed_on_any_mask(recipe in any_mask()) {
         let mask = recipe.draw();
-        let found = skeleton::paths_from_mask(&mask, MIN_LENGTH_PX).unwrap();
+        let found = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX).unwrap();
         prop_assert!(found.width_px.is_finite() && found.width_px >= 0.0);
         for path in &found.paths {
             prop_assert!(path.length_px >= MIN_LENGTH_PX, "{}", path.length_px);

@@ -357,9 +357,11 @@ impl Pipeline {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
         let found = match self.config.instances {
-            InstanceMethod::Skeleton => {
-                skeleton::paths_from_mask(mask_roi, self.config.min_cable_length_px)?
-            }
+            InstanceMethod::Skeleton => skeleton::paths_from_mask(
+                mask_roi,
+                (image_roi.channels() == 3).then_some(image_roi),
+                self.config.min_cable_length_px,
+            )?,
             InstanceMethod::Superpixels => super::superpixels::paths_from_mask(
                 image_roi,
                 mask_roi,
@@ -920,6 +922,56 @@ mod tests {
                             other_radius_px,
                         );
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cables_touching_side_by_side_keep_to_their_own_colour() {
+        // Two 10 px cables come together, touch side by side for 60 or
+        // 100 px, and part the way they came. Their shape alone reads as a
+        // shallow crossing: bending least pairs each with the other's far
+        // branch. Their colours tell them apart. Along the stretch they
+        // share, one skeleton runs between them, 5 px from each.
+        let polyline = |corners: &[[f64; 2]]| {
+            let mut points = segment_px(corners[0], corners[1]);
+            for w in corners[1..].windows(2) {
+                points.extend(segment_px(w[0], w[1]).into_iter().skip(1));
+            }
+            points
+        };
+        for (run_px, part_px) in [(60.0, 100.0), (100.0, 60.0), (100.0, 100.0)] {
+            let (x0, x1) = (320.0 - run_px / 2.0, 320.0 + run_px / 2.0);
+            let upper = polyline(&[
+                [40.0, 235.0 - part_px],
+                [x0, 235.0],
+                [x1, 235.0],
+                [600.0, 235.0 - part_px],
+            ]);
+            let lower = polyline(&[
+                [40.0, 245.0 + part_px],
+                [x0, 245.0],
+                [x1, 245.0],
+                [600.0, 245.0 + part_px],
+            ]);
+            for (upper_bgr, lower_bgr) in [([20; 3], [150, 60, 40]), ([30, 30, 200], [40, 200, 40])]
+            {
+                let scene = draw_scene(
+                    480,
+                    640,
+                    Background::Plain { bgr: [220; 3] },
+                    0.0,
+                    vec![
+                        matte_cable(upper.clone(), 10.0, upper_bgr),
+                        matte_cable(lower.clone(), 10.0, lower_bgr),
+                    ],
+                    4,
+                )
+                .unwrap();
+                let out = detect(&scene.bgr, keep_straight());
+                if let Err(why) = each_followed(&out, &[upper.clone(), lower.clone()], 10.0) {
+                    panic!("touching for {run_px} px, {upper_bgr:?} over {lower_bgr:?}: {why}");
                 }
             }
         }

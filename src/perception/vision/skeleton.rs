@@ -19,7 +19,8 @@
 
 use std::collections::HashMap;
 
-use opencv::core::Mat;
+use opencv::core::{Mat, Vec3b};
+use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
@@ -59,6 +60,22 @@ const UNPAIRED_COST_RAD: f64 = 1.2;
 /// along single wires turn by at most 0.73 rad so; where two wires were
 /// found as one, by 1.03 rad or more.
 const CORNER_TURN_RAD: f64 = 0.9;
+/// Cost, in radians of bending, of pairing two branches at a crossing
+/// whose colours differ by [`COLOUR_FULL_DELTA_E`] or more (less in
+/// proportion): where two cables of different colours cross at a shallow
+/// angle or bend through the crossing, their shapes alone can pair the
+/// wrong branches. Less than [`UNPAIRED_COST_RAD`], so that shading and
+/// highlights, which change a cable's colour along it, do not cut it.
+const COLOUR_COST_RAD: f64 = 1.0;
+/// Colour differences (CIE76 ΔE, in OpenCV's 8-bit Lab) up to this cost
+/// nothing: a cable's own colour varies so much along it with shading and
+/// noise, and a branch too short to show its colour must not be preferred
+/// to one of nearly the same colour.
+const COLOUR_SAME_DELTA_E: f64 = 10.0;
+/// A colour difference that costs the whole of [`COLOUR_COST_RAD`] (red
+/// against orange is about 40); between this and [`COLOUR_SAME_DELTA_E`]
+/// the cost grows in proportion.
+const COLOUR_FULL_DELTA_E: f64 = 40.0;
 /// Above this many branches at one junction the exact least-bending pairing
 /// is too costly and pairs are taken greedily, straightest first.
 const MAX_EXACT_BRANCHES: usize = 8;
@@ -479,6 +496,59 @@ impl Graph {
             .collect()
     }
 
+    /// Each branch's colour in Lab past the crossing, where the other cable
+    /// neither covers nor shades it: the per-channel median of the image
+    /// under its skeleton from 2.75 to 4.75 cable widths out (the stretch
+    /// that [`Self::branch_tangent`] follows). `None` for a branch too
+    /// short to reach it.
+    fn branch_colours_lab(
+        &self,
+        branches: &[Branch],
+        image: &Mat,
+        width_px: f64,
+    ) -> Result<Vec<Option<[f64; 3]>>, VisionError> {
+        let (skip, span) = direction_stretch(width_px);
+        let mut medians_bgr = Vec::new();
+        for &branch in branches {
+            let pts = self.outward(branch);
+            let to = pts.len().min(skip + 2 * span);
+            let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
+            let Some(stretch) = pts.get(from..to).filter(|s| !s.is_empty()) else {
+                medians_bgr.push(None);
+                continue;
+            };
+            let mut channels = [Vec::new(), Vec::new(), Vec::new()];
+            for p in stretch {
+                let bgr = image
+                    .at_2d::<Vec3b>(p[1] as i32, p[0] as i32)
+                    .map_err(cv("a branch's colour"))?;
+                for (channel, value) in channels.iter_mut().zip(bgr.0) {
+                    channel.push(value);
+                }
+            }
+            medians_bgr.push(Some(channels.map(|mut c| {
+                c.sort_unstable();
+                c[c.len() / 2]
+            })));
+        }
+        let pixels: Vec<Vec3b> = medians_bgr
+            .iter()
+            .map(|m| Vec3b::from(m.unwrap_or_default()))
+            .collect();
+        let row = Mat::from_slice(&pixels).map_err(cv("branch colours"))?;
+        let mut lab = Mat::default();
+        imgproc::cvt_color_def(&row, &mut lab, imgproc::COLOR_BGR2Lab)
+            .map_err(cv("branch colours to Lab"))?;
+        let lab = lab
+            .data_typed::<Vec3b>()
+            .map_err(cv("branch colours to Lab"))?;
+        Ok(medians_bgr
+            .iter()
+            .zip(lab)
+            .map(|(m, v)| m.map(|_| v.0.map(f64::from)))
+            .collect())
+    }
+
     /// Pixels of a branch going out of its junction.
     fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
         let px = &self.edges[e].pixels;
@@ -597,8 +667,25 @@ fn bend_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
     cos.clamp(-1.0, 1.0).acos()
 }
 
-/// Least total cost pairing of `k` branches where `cost[i][j]` is the bend
-/// of joining i and j and leaving one unpaired costs [`UNPAIRED_COST_RAD`].
+/// Adds to each pairing's bend the cost of the two branches' colour
+/// difference (see [`COLOUR_COST_RAD`]); branches of unknown colour cost
+/// nothing more.
+fn add_colour_costs(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
+    for (row, a) in cost.iter_mut().zip(colours_lab) {
+        for (c, b) in row.iter_mut().zip(colours_lab) {
+            if let (Some(a), Some(b)) = (a, b) {
+                let delta_e = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+                let over =
+                    (delta_e - COLOUR_SAME_DELTA_E) / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
+                *c += COLOUR_COST_RAD * over.clamp(0.0, 1.0);
+            }
+        }
+    }
+}
+
+/// Least total cost pairing of `k` branches where `cost[i][j]` is the cost
+/// of joining i and j (their bend, plus any colour difference's cost) and
+/// leaving one unpaired costs [`UNPAIRED_COST_RAD`].
 fn best_pairing(cost: &[Vec<f64>]) -> Vec<(usize, usize)> {
     let k = cost.len();
     if k > MAX_EXACT_BRANCHES {
@@ -691,8 +778,13 @@ fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64; 2]>> {
 }
 
 /// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
-/// end to end, of at least `min_length_px`.
-pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, VisionError> {
+/// end to end, of at least `min_length_px`. With the BGR `image` the mask
+/// was found in (of its size), crossings also pair branches by colour.
+pub fn paths_from_mask(
+    mask: &Mat,
+    image: Option<&Mat>,
+    min_length_px: f64,
+) -> Result<FoundPaths, VisionError> {
     let mut grid = Grid::from_mask(mask)?;
     let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
     let area = fg.len() as f64;
@@ -729,7 +821,12 @@ pub fn paths_from_mask(mask: &Mat, min_length_px: f64) -> Result<FoundPaths, Vis
         let pairs = if list.len() == 2 {
             vec![(0, 1)]
         } else {
-            best_pairing(&graph.bend_costs(list, centre, width_px))
+            let mut cost = graph.bend_costs(list, centre, width_px);
+            if let Some(image) = image {
+                let colours = graph.branch_colours_lab(list, image, width_px)?;
+                add_colour_costs(&mut cost, &colours);
+            }
+            best_pairing(&cost)
         };
         for (a, b) in pairs {
             partner.insert(list[a], list[b]);
@@ -856,6 +953,36 @@ mod tests {
             all.windows(2)
                 .all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) < 1.1)
         );
+    }
+
+    #[test]
+    fn colour_costs_pair_like_colours_and_let_shading_pass() {
+        // Three branches: 0 and 1 continue each other a little better than
+        // 0 and 2, by shape.
+        let pi = std::f64::consts::PI;
+        let bends = || {
+            vec![
+                vec![pi, 0.30, 0.35],
+                vec![0.30, pi, 2.5],
+                vec![0.35, 2.5, pi],
+            ]
+        };
+        let black = Some([10.0, 128.0, 128.0]);
+        let shaded_black = Some([18.0, 127.0, 129.0]);
+        let red = Some([130.0, 190.0, 170.0]);
+        // Branch 1 red, 0 and 2 black: colour pairs 0 with 2.
+        let mut cost = bends();
+        add_colour_costs(&mut cost, &[black, red, black]);
+        assert_eq!(best_pairing(&cost), vec![(0, 2)]);
+        assert!((cost[0][1] - (0.30 + COLOUR_COST_RAD)).abs() < 1e-9);
+        // A shading difference, or a branch of unknown colour, costs
+        // nothing: shape decides.
+        for colours in [[black, shaded_black, black], [black, None, black]] {
+            let mut cost = bends();
+            add_colour_costs(&mut cost, &colours);
+            assert_eq!(cost, bends());
+            assert_eq!(best_pairing(&cost), vec![(0, 1)]);
+        }
     }
 
     #[test]
