@@ -32,7 +32,8 @@ pub enum MaskMethod {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum InstanceMethod {
-    /// Skeleton graph with least-bending pairing at junctions (fast).
+    /// Skeleton graph, its branches paired at junctions by least bending
+    /// and by colour (fast).
     Skeleton,
     /// The paper's: SLIC superpixels on the mask and walks on their
     /// adjacency graph.
@@ -879,11 +880,11 @@ mod tests {
     #[test]
     fn crossings_between_cables_bending_opposite_ways_are_mostly_resolved() {
         // 90 crossings, 20° to 63°, the steeper cable as below, the other
-        // bending the other way at 180 or 250 px. 81 are resolved; before
-        // paths were bridged across crossings and junctions up to 10 widths
-        // apart merged, 62 were. The others are ambiguous to the eye too:
-        // the cables run over each other for several widths, and the paths
-        // cross inside that stretch.
+        // bending the other way at 180 or 250 px. 82 are resolved; by
+        // bending alone, 81; before paths were bridged across crossings and
+        // junctions up to 10 widths apart merged, 62. The others are
+        // ambiguous to the eye too: the cables run over each other for
+        // several widths, and the paths cross inside that stretch.
         let mut failures = Vec::new();
         for crossing_rad in [0.35, 0.5, 0.7, 0.9, 1.1] {
             for steep_rad in [-0.9, -1.1, -1.3] {
@@ -901,14 +902,14 @@ mod tests {
                 }
             }
         }
-        assert!(failures.len() <= 9, "{:#?}", failures);
+        assert!(failures.len() <= 8, "{:#?}", failures);
     }
 
     #[test]
     fn every_crossing_of_forty_degrees_or_more_between_bending_cables_is_resolved() {
         // 54 crossings: 40°, 52° and 63°; the steeper cable at three
         // headings and bending at radii of 90 to 150 px, the other bending
-        // the same way at 180 or 250 px. At 20° and 29°, 18 of 36 such
+        // the same way at 180 or 250 px. At 20° and 29°, 19 of 36 such
         // crossings are resolved: the sharper cable curls along the other
         // for several widths.
         for crossing_rad in [0.7, 0.9, 1.1] {

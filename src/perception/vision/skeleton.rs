@@ -11,11 +11,12 @@
 //! thin into two 3-way junctions rather than one 4-way one. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least, each branch's direction followed back along its curve into the
-//! junction: a cable goes on through a crossing as it bends, and its path is
-//! bridged across the crossing by a cubic Hermite curve. Walking edges and
-//! pairings from end to end gives one pixel path per cable; a path that
-//! turns sharply is two cables and is cut there. `paths.rs` then finishes
-//! the paths as it does the superpixel method's.
+//! junction, and, given the image, pairing branches of unlike colour costs
+//! more: a cable goes on through a crossing as it bends and keeps its
+//! colour, and its path is bridged across the crossing by a cubic Hermite
+//! curve. Walking edges and pairings from end to end gives one pixel path
+//! per cable; a path that turns sharply is two cables and is cut there.
+//! `paths.rs` then finishes the paths as it does the superpixel method's.
 
 use std::collections::HashMap;
 
@@ -76,8 +77,8 @@ const COLOUR_SAME_DELTA_E: f64 = 10.0;
 /// against orange is about 40); between this and [`COLOUR_SAME_DELTA_E`]
 /// the cost grows in proportion.
 const COLOUR_FULL_DELTA_E: f64 = 40.0;
-/// Above this many branches at one junction the exact least-bending pairing
-/// is too costly and pairs are taken greedily, straightest first.
+/// Above this many branches at one junction the exact least-cost pairing
+/// is too costly and pairs are taken greedily, cheapest first.
 const MAX_EXACT_BRANCHES: usize = 8;
 
 /// Thinning and graph on a grid padded by one pixel, so that neighbour
@@ -499,8 +500,8 @@ impl Graph {
     /// Each branch's colour in Lab past the crossing, where the other cable
     /// neither covers nor shades it: the per-channel median of the image
     /// under its skeleton from 2.75 to 4.75 cable widths out (the stretch
-    /// that [`Self::branch_tangent`] follows). `None` for a branch too
-    /// short to reach it.
+    /// that [`Self::branch_tangent`] follows), or over the last width of a
+    /// shorter branch. `None` for a branch that ends inside the crossing.
     fn branch_colours_lab(
         &self,
         branches: &[Branch],
@@ -799,7 +800,8 @@ pub fn paths_from_mask(
     graph.prune_spurs(SPUR_WIDTHS * width_px + SPUR_EXTRA_PX);
     let root = graph.merge_junctions(width_px);
 
-    // Branches per merged junction, and their least-bending pairing.
+    // Branches per merged junction, and their least-cost pairing (bending,
+    // and colour when the image is given).
     let mut branches: HashMap<usize, Vec<Branch>> = HashMap::new();
     for (e, edge) in graph.edges.iter().enumerate() {
         if !edge.alive || edge.internal {
