@@ -498,10 +498,11 @@ impl Graph {
     }
 
     /// Each branch's colour in Lab past the crossing, where the other cable
-    /// neither covers nor shades it: the per-channel median of the image
-    /// under its skeleton from 2.75 to 4.75 cable widths out (the stretch
-    /// that [`Self::branch_tangent`] follows), or over the last width of a
-    /// shorter branch. `None` for a branch that ends inside the crossing.
+    /// neither covers nor shades it: under its skeleton from 2.75 to 4.75
+    /// cable widths out (the stretch that [`Self::branch_tangent`]
+    /// follows), or over the last width of a shorter branch (see
+    /// [`median_colour_lab`]). `None` for a branch that ends inside the
+    /// crossing.
     fn branch_colours_lab(
         &self,
         branches: &[Branch],
@@ -509,45 +510,18 @@ impl Graph {
         width_px: f64,
     ) -> Result<Vec<Option<[f64; 3]>>, VisionError> {
         let (skip, span) = direction_stretch(width_px);
-        let mut medians_bgr = Vec::new();
-        for &branch in branches {
-            let pts = self.outward(branch);
-            let to = pts.len().min(skip + 2 * span);
-            let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
-            let Some(stretch) = pts.get(from..to).filter(|s| !s.is_empty()) else {
-                medians_bgr.push(None);
-                continue;
-            };
-            let mut channels = [Vec::new(), Vec::new(), Vec::new()];
-            for p in stretch {
-                let bgr = image
-                    .at_2d::<Vec3b>(p[1] as i32, p[0] as i32)
-                    .map_err(cv("a branch's colour"))?;
-                for (channel, value) in channels.iter_mut().zip(bgr.0) {
-                    channel.push(value);
+        branches
+            .iter()
+            .map(|&branch| {
+                let pts = self.outward(branch);
+                let to = pts.len().min(skip + 2 * span);
+                let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
+                match pts.get(from..to) {
+                    Some(stretch) => median_colour_lab(image, stretch),
+                    None => Ok(None),
                 }
-            }
-            medians_bgr.push(Some(channels.map(|mut c| {
-                c.sort_unstable();
-                c[c.len() / 2]
-            })));
-        }
-        let pixels: Vec<Vec3b> = medians_bgr
-            .iter()
-            .map(|m| Vec3b::from(m.unwrap_or_default()))
-            .collect();
-        let row = Mat::from_slice(&pixels).map_err(cv("branch colours"))?;
-        let mut lab = Mat::default();
-        imgproc::cvt_color_def(&row, &mut lab, imgproc::COLOR_BGR2Lab)
-            .map_err(cv("branch colours to Lab"))?;
-        let lab = lab
-            .data_typed::<Vec3b>()
-            .map_err(cv("branch colours to Lab"))?;
-        Ok(medians_bgr
-            .iter()
-            .zip(lab)
-            .map(|(m, v)| m.map(|_| v.0.map(f64::from)))
-            .collect())
+            })
+            .collect()
     }
 
     /// Pixels of a branch going out of its junction.
@@ -668,6 +642,41 @@ fn bend_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
     cos.clamp(-1.0, 1.0).acos()
 }
 
+/// The colour of a BGR image under `points` (pixel centres inside it), in
+/// OpenCV's 8-bit Lab: the per-channel median, which a glint or a speck
+/// of the background does not move. `None` for no points.
+fn median_colour_lab(image: &Mat, points: &[[f64; 2]]) -> Result<Option<[f64; 3]>, VisionError> {
+    if points.is_empty() {
+        return Ok(None);
+    }
+    let mut channels = [Vec::new(), Vec::new(), Vec::new()];
+    for p in points {
+        let bgr = image
+            .at_2d::<Vec3b>(p[1].round() as i32, p[0].round() as i32)
+            .map_err(cv("a cable's colour"))?;
+        for (channel, value) in channels.iter_mut().zip(bgr.0) {
+            channel.push(value);
+        }
+    }
+    let median = [Vec3b::from(channels.map(|mut c| {
+        c.sort_unstable();
+        c[c.len() / 2]
+    }))];
+    let pixel = Mat::from_slice(&median).map_err(cv("a cable's colour"))?;
+    let mut lab = Mat::default();
+    imgproc::cvt_color_def(&pixel, &mut lab, imgproc::COLOR_BGR2Lab)
+        .map_err(cv("a cable's colour to Lab"))?;
+    let lab = lab
+        .at_2d::<Vec3b>(0, 0)
+        .map_err(cv("a cable's colour to Lab"))?;
+    Ok(Some(lab.0.map(f64::from)))
+}
+
+/// The CIE76 colour difference of two Lab colours.
+fn delta_e(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
 /// Adds to each pairing's bend the cost of the two branches' colour
 /// difference (see [`COLOUR_COST_RAD`]); branches of unknown colour cost
 /// nothing more.
@@ -675,9 +684,8 @@ fn add_colour_costs(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
     for (row, a) in cost.iter_mut().zip(colours_lab) {
         for (c, b) in row.iter_mut().zip(colours_lab) {
             if let (Some(a), Some(b)) = (a, b) {
-                let delta_e = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-                let over =
-                    (delta_e - COLOUR_SAME_DELTA_E) / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
+                let over = (delta_e(*a, *b) - COLOUR_SAME_DELTA_E)
+                    / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
                 *c += COLOUR_COST_RAD * over.clamp(0.0, 1.0);
             }
         }
