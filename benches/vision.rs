@@ -38,6 +38,16 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
             skeleton::paths_from_mask(black_box(instance_mask), None, config.min_cable_length_px)
         })
     });
+    // As the pipeline runs it: crossings also pair branches by colour.
+    group.bench_function("instances (skeleton, with colour)", |b| {
+        b.iter(|| {
+            skeleton::paths_from_mask(
+                black_box(instance_mask),
+                Some(image),
+                config.min_cable_length_px,
+            )
+        })
+    });
     group.bench_function("spline", |b| {
         b.iter(|| {
             found
