@@ -958,18 +958,10 @@ mod tests {
             ]);
             for (upper_bgr, lower_bgr) in [([20; 3], [150, 60, 40]), ([30, 30, 200], [40, 200, 40])]
             {
-                let scene = draw_scene(
-                    480,
-                    640,
-                    Background::Plain { bgr: [220; 3] },
-                    0.0,
-                    vec![
-                        matte_cable(upper.clone(), 10.0, upper_bgr),
-                        matte_cable(lower.clone(), 10.0, lower_bgr),
-                    ],
-                    4,
-                )
-                .unwrap();
+                let scene = on_gray_table(vec![
+                    matte_cable(upper.clone(), 10.0, upper_bgr),
+                    matte_cable(lower.clone(), 10.0, lower_bgr),
+                ]);
                 let out = detect(&scene.bgr, keep_straight());
                 if let Err(why) = each_followed(&out, &[upper.clone(), lower.clone()], 10.0) {
                     panic!("touching for {run_px} px, {upper_bgr:?} over {lower_bgr:?}: {why}");
