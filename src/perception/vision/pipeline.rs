@@ -358,6 +358,8 @@ impl Pipeline {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
         let found = match self.config.instances {
+            // `instances_from_mask` has no image and passes the mask as one:
+            // crossings are then paired by shape alone.
             InstanceMethod::Skeleton => skeleton::paths_from_mask(
                 mask_roi,
                 (image_roi.channels() == 3).then_some(image_roi),
