@@ -198,6 +198,15 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
         stderr.contains("is a folder, not an image file"),
         "{stderr}"
     );
+    // OpenCV would decode the first half and grey the rest.
+    let bytes = std::fs::read(&empty).expect("read");
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).expect("write");
+    let stderr = refused(&["detect", text(&cut)]);
+    assert!(
+        stderr.contains("cut.jpg: the JPEG data stops before its end-of-image marker"),
+        "{stderr}"
+    );
 }
 
 /// What `cablecell ARGS` wrote to stderr, having refused its input (exit 2).

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
 use cablecell::task::cell_file::{CellFile, DetectorBackend, FrameConfig};
@@ -11,7 +12,7 @@ use opencv::core::Mat;
 use serde::Serialize;
 
 use super::Status;
-use super::vision_io::{VisionArgs, create_dir, draw_overlay, read_image, write_png};
+use super::vision_io::{VisionArgs, create_dir, draw_overlay, write_png};
 
 /// What `detect --json` prints per image.
 #[derive(Serialize)]

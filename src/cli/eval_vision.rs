@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use cablecell::campaign::stats::{Rate, Summary};
+use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::eval::{
     CENTRELINE_NEAR_PX, GroundTruth, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
     label_consistency, score,
@@ -18,7 +19,7 @@ use serde::Serialize;
 
 use super::Status;
 use super::vision_io::{
-    InstancesArg, MaskArg, VisionArgs, create_dir, draw_line, draw_overlay, read_image, write_png,
+    InstancesArg, MaskArg, VisionArgs, create_dir, draw_line, draw_overlay, write_png,
 };
 
 #[derive(Args, Debug, Clone)]

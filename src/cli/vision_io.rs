@@ -1,6 +1,6 @@
 //! What `detect` and `eval-vision` share: the pipeline's configuration
 //! from the command line, the network loaded only when a scene needs it,
-//! reading images, and writing them with the cables found drawn on them.
+//! and writing images with the cables found drawn on them.
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,6 @@ use cablecell::perception::vision::{
 };
 use clap::Args;
 use opencv::core::{Mat, Point, Scalar, Vector};
-use opencv::prelude::*;
 use opencv::{imgcodecs, imgproc};
 
 #[derive(Args, Debug, Clone)]
@@ -142,23 +141,6 @@ impl VisionArgs {
         )
         .tuned(self.threshold, self.net_scale)
     }
-}
-
-/// Reads a colour image, or says which file could not be read.
-pub fn read_image(path: &Path) -> Result<Mat, String> {
-    let name = path.display().to_string();
-    if path.is_dir() {
-        return Err(format!("{name}: is a folder, not an image file"));
-    }
-    if !path.is_file() {
-        return Err(format!("{name}: no such image file"));
-    }
-    let image = imgcodecs::imread(&name, imgcodecs::IMREAD_COLOR)
-        .map_err(|e| format!("{name}: cannot read the image: {e}"))?;
-    if image.empty() {
-        return Err(format!("{name}: not an image OpenCV can decode"));
-    }
-    Ok(image)
 }
 
 pub fn create_dir(dir: &Path) -> Result<(), String> {

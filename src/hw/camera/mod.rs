@@ -1,9 +1,11 @@
 //! The 2D camera that watches the cable: one image per capture, 8-bit BGR,
 //! of the size its intrinsics give.
 
+mod image_file;
 mod opencv_camera;
 mod sim;
 
+pub use image_file::read_image;
 pub use opencv_camera::OpencvCamera;
 pub use sim::SimCamera;
 

@@ -6,11 +6,10 @@
 use std::path::{Path, PathBuf};
 
 use opencv::core::Mat;
-use opencv::imgcodecs;
 use opencv::prelude::*;
 use opencv::videoio::{self, VideoCapture};
 
-use super::Camera;
+use super::{Camera, read_image};
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::vision::calibration::CameraModel;
 use crate::task::cell_file::CameraSource;
@@ -108,14 +107,7 @@ impl OpencvCamera {
                     return Err(self.unusable(format!("all {count} images have been read")));
                 };
                 *next += 1;
-                let image = imgcodecs::imread(&path, imgcodecs::IMREAD_COLOR).unwrap_or_default();
-                if image.empty() {
-                    return Err(self.unusable(format!(
-                        "{} is not an image OpenCV can read",
-                        path.display()
-                    )));
-                }
-                Ok(image)
+                read_image(&path).map_err(|e| self.unusable(e))
             }
         }
     }
