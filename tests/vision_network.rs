@@ -145,7 +145,7 @@ fn finds_a_drawn_cable_on_a_plain_background() {
     check_mask(&mask);
     let (recall, false_pos) = recall_and_false_positives(&mask, &truth);
     eprintln!("plain background: recall {recall:.3}, false positives {false_pos:.4}");
-    // measured with the shipped model: recall 0.973, false positives 0.0022
+    // measured with the shipped model: recall 0.935, false positives 0.0008
     assert!(recall >= 0.9, "recall {recall}");
     assert!(false_pos <= 0.01, "false positives {false_pos}");
 }
@@ -185,7 +185,7 @@ fn finds_a_drawn_cable_on_a_textured_background() {
     check_mask(&mask);
     let (recall, false_pos) = recall_and_false_positives(&mask, &truth);
     eprintln!("textured background: recall {recall:.3}, false positives {false_pos:.4}");
-    // measured with the shipped model: recall 0.949, false positives 0.0009
+    // measured with the shipped model: recall 0.920, false positives 0.0006
     assert!(recall >= 0.9, "recall {recall}");
     assert!(false_pos <= 0.01, "false positives {false_pos}");
 }
@@ -214,7 +214,7 @@ fn the_8_bit_network_marks_what_the_float_one_marks() {
             .count();
         let marked = usize::try_from(opencv::core::count_non_zero(&b).unwrap()).unwrap();
         eprintln!("scene {i}: {differ} pixels differ, the float network marks {marked}");
-        // measured: 24 of 5854, 27 of 5373, and 0 of 0 (bare wood)
+        // measured: 32 of 4843, 19 of 4715, and 0 of 0 (bare wood)
         assert!(
             differ * 50 <= marked,
             "scene {i}: {differ} pixels differ, more than 2 % of {marked}"
@@ -268,10 +268,10 @@ fn a_wrong_image_is_reported() {
 
 /// The held-out photographs 00030..00044 of cables-dev (not used in
 /// training): mean union DICE at threshold 0.5 and the default input size.
-/// Measured with the shipped model: DICE 0.6754, IoU 0.5108
+/// Measured with the shipped model: DICE 0.6859, IoU 0.5232
 /// (models/README.md says why the labels hold it there); this allows 0.02
 /// less.
-const HELD_OUT_MIN_DICE: f64 = 0.655;
+const HELD_OUT_MIN_DICE: f64 = 0.665;
 
 #[test]
 fn held_out_real_photographs() {
@@ -309,19 +309,19 @@ fn held_out_real_photographs() {
 
 /// The whole pipeline with the shipped model on the held-out photographs,
 /// default settings (`eval-vision --from 00030 --to 00044`). Measured:
-/// union DICE 0.697, the count right in 9 of 15, grasp points 2.7 px from
+/// union DICE 0.707, the count right in 10 of 15, grasp points 2.7 px from
 /// the labelled centre lines on average (models/README.md says why the
 /// first two are low); the bounds allow a little drift, keep the grasp
 /// point inside the 5 px goal, and fail on a worse model or pipeline. Of
 /// the 95 labelled cables, 3 are not found, all short pieces at the
-/// border; of the 95 found, 3 match no label. Of the labelled centre
-/// lines' length, 92.3 % lies within 5 px of a found one, and 91.5 % of
+/// border; of the 94 found, 2 match no label. Of the labelled centre
+/// lines' length, 93.8 % lies within 5 px of a found one, and 92.3 % of
 /// the found length within 5 px of a labelled one. The labels lie above
-/// the wires found: moved up (by 1–3 px) in 14 of the 15 images, the found
-/// masks match them at a mean union DICE of 0.721.
-const HELD_OUT_PIPELINE_DICE: f64 = 0.675;
-const HELD_OUT_PIPELINE_LENGTH_SHARE: f64 = 0.89;
-const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 7;
+/// the wires found: moved up (by 1–2 px) in 14 of the 15 images, the found
+/// masks match them at a mean union DICE of 0.730.
+const HELD_OUT_PIPELINE_DICE: f64 = 0.685;
+const HELD_OUT_PIPELINE_LENGTH_SHARE: f64 = 0.90;
+const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 8;
 const HELD_OUT_PIPELINE_GRASP_PX: f64 = 4.5;
 const HELD_OUT_PIPELINE_UNMATCHED: usize = 4;
 const HELD_OUT_PIPELINE_MOVED_UP: usize = 12;
