@@ -486,44 +486,6 @@ impl Graph {
             .collect()
     }
 
-    /// The bend of joining each two of `branches` at a junction at `centre`.
-    fn bend_costs(&self, branches: &[Branch], centre: [f64; 2], width_px: f64) -> Vec<Vec<f64>> {
-        let dirs: Vec<[f64; 2]> = branches
-            .iter()
-            .map(|&b| self.branch_tangent(b, centre, width_px))
-            .collect();
-        dirs.iter()
-            .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
-            .collect()
-    }
-
-    /// Each branch's colour in Lab past the crossing, where the other cable
-    /// neither covers nor shades it: under its skeleton from 2.75 to 4.75
-    /// cable widths out (the stretch that [`Self::branch_tangent`]
-    /// follows), or over the last width of a shorter branch (see
-    /// [`median_colour_lab`]). `None` for a branch that ends inside the
-    /// crossing.
-    fn branch_colours_lab(
-        &self,
-        branches: &[Branch],
-        image: &Mat,
-        width_px: f64,
-    ) -> Result<Vec<Option<[f64; 3]>>, VisionError> {
-        let (skip, span) = direction_stretch(width_px);
-        branches
-            .iter()
-            .map(|&branch| {
-                let pts = self.outward(branch);
-                let to = pts.len().min(skip + 2 * span);
-                let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
-                match pts.get(from..to) {
-                    Some(stretch) => median_colour_lab(image, stretch),
-                    None => Ok(None),
-                }
-            })
-            .collect()
-    }
-
     /// Pixels of a branch going out of its junction.
     fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
         let px = &self.edges[e].pixels;
@@ -539,33 +501,69 @@ impl Graph {
     fn branch_direction(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
         direction_leaving(&self.outward(branch), centre, width_px)
     }
+}
 
-    /// The branch's direction at the junction's centre: its direction past
-    /// the junction's distortion, turned on towards the centre by as much
-    /// as it turns over the next two widths, so that a cable bending
-    /// through a crossing is judged by its curve rather than its chord, and
-    /// branches leaving a shallow crossing's two junctions, far apart, are
-    /// compared at one point.
-    fn branch_tangent(&self, branch: Branch, centre: [f64; 2], width_px: f64) -> [f64; 2] {
-        let pts = self.outward(branch);
-        let near = direction_leaving(&pts, centre, width_px);
-        let (skip, span) = direction_stretch(width_px);
-        let (i1, i2) = (skip + span, skip + 2 * span);
-        if i2 >= pts.len() {
-            return near;
-        }
-        let far = [pts[i2][0] - pts[i1][0], pts[i2][1] - pts[i1][1]];
-        let near_rad = near[1].atan2(near[0]);
-        let turn_rad = near_rad - far[1].atan2(far[0]);
-        let turn_rad = turn_rad.sin().atan2(turn_rad.cos());
-        // From the middle of the far stretch to the middle of the near one
-        // is one span; from there to the branch's start, skip + span / 2,
-        // and on to the junction's centre.
-        let to_centre_px = (pts[0][0] - centre[0]).hypot(pts[0][1] - centre[1]);
-        let back_px = skip as f64 + 0.5 * span as f64 + to_centre_px;
-        let back_rad = near_rad + turn_rad * back_px / span as f64;
-        [back_rad.cos(), back_rad.sin()]
+/// The bend of joining each two branches at a junction at `centre`, given
+/// each branch's pixels going out of it.
+fn bend_costs(outward: &[Vec<[f64; 2]>], centre: [f64; 2], width_px: f64) -> Vec<Vec<f64>> {
+    let dirs: Vec<[f64; 2]> = outward
+        .iter()
+        .map(|pts| tangent_at_centre(pts, centre, width_px))
+        .collect();
+    dirs.iter()
+        .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
+        .collect()
+}
+
+/// Each branch's colour in Lab past the crossing, given its pixels going
+/// out of it, where the other cable neither covers nor shades it: under
+/// its skeleton from 2.75 to 4.75 cable widths out (the stretch that
+/// [`tangent_at_centre`] follows), or over the last width of a shorter
+/// branch (see [`median_colour_lab`]). `None` for a branch that ends
+/// inside the crossing.
+fn branch_colours_lab(
+    outward: &[Vec<[f64; 2]>],
+    image: &Mat,
+    width_px: f64,
+) -> Result<Vec<Option<[f64; 3]>>, VisionError> {
+    let (skip, span) = direction_stretch(width_px);
+    outward
+        .iter()
+        .map(|pts| {
+            let to = pts.len().min(skip + 2 * span);
+            let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
+            match pts.get(from..to) {
+                Some(stretch) => median_colour_lab(image, stretch),
+                None => Ok(None),
+            }
+        })
+        .collect()
+}
+
+/// A branch's direction at the junction's centre, given its pixels `pts`
+/// going out of it: its direction past the junction's distortion, turned
+/// on towards the centre by as much as it turns over the next two widths,
+/// so that a cable bending through a crossing is judged by its curve
+/// rather than its chord, and branches leaving a shallow crossing's two
+/// junctions, far apart, are compared at one point.
+fn tangent_at_centre(pts: &[[f64; 2]], centre: [f64; 2], width_px: f64) -> [f64; 2] {
+    let near = direction_leaving(pts, centre, width_px);
+    let (skip, span) = direction_stretch(width_px);
+    let (i1, i2) = (skip + span, skip + 2 * span);
+    if i2 >= pts.len() {
+        return near;
     }
+    let far = [pts[i2][0] - pts[i1][0], pts[i2][1] - pts[i1][1]];
+    let near_rad = near[1].atan2(near[0]);
+    let turn_rad = near_rad - far[1].atan2(far[0]);
+    let turn_rad = turn_rad.sin().atan2(turn_rad.cos());
+    // From the middle of the far stretch to the middle of the near one
+    // is one span; from there to the branch's start, skip + span / 2,
+    // and on to the junction's centre.
+    let to_centre_px = (pts[0][0] - centre[0]).hypot(pts[0][1] - centre[1]);
+    let back_px = skip as f64 + 0.5 * span as f64 + to_centre_px;
+    let back_rad = near_rad + turn_rad * back_px / span as f64;
+    [back_rad.cos(), back_rad.sin()]
 }
 
 /// The direction of a branch's pixels `pts` (going out of a junction at
@@ -831,9 +829,10 @@ pub fn paths_from_mask(
         let pairs = if list.len() == 2 {
             vec![(0, 1)]
         } else {
-            let mut cost = graph.bend_costs(list, centre, width_px);
+            let outward: Vec<_> = list.iter().map(|&b| graph.outward(b)).collect();
+            let mut cost = bend_costs(&outward, centre, width_px);
             if let Some(image) = image {
-                let colours = graph.branch_colours_lab(list, image, width_px)?;
+                let colours = branch_colours_lab(&outward, image, width_px)?;
                 add_colour_costs(&mut cost, &colours);
             }
             best_pairing(&cost)
