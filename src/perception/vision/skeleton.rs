@@ -14,11 +14,13 @@
 //! junction, and, given the image, pairing branches of unlike colour costs
 //! more: a cable goes on through a crossing as it bends and keeps its
 //! colour, and its path is bridged across the crossing by a cubic Hermite
-//! curve. Walking edges and pairings from end to end gives one pixel path
+//! curve; a loop's two ends are not paired with each other, since a cable
+//! that loops across itself goes on through the crossing. Walking edges
+//! and pairings from end to end gives one pixel path
 //! per cable; a path that turns sharply is two cables and is cut there.
 //! `paths.rs` then finishes the paths as it does the superpixel method's.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use opencv::core::{Mat, Vec3b};
 use opencv::imgproc;
@@ -51,6 +53,10 @@ const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
 /// cables, so a cable that bends through the crossing leaves it at up to
 /// 45° (0.6 rad split 3 crossings of the training photographs wrongly).
 const SPLIT_CONTINUE_RAD: f64 = 0.9;
+/// A run of skeleton that leaves a crossing and returns to it is a loop of
+/// one cable, not the lens between two cables crossing twice, when it is
+/// this many times longer than the run the two strands share.
+const LOOP_TO_OVERLAP: f64 = 3.0;
 /// Cost, in radians of bending, of leaving a branch unpaired at a junction
 /// (the cable ends there). Two branches are joined rather than both left
 /// unpaired when their bend is under twice this (about 140°).
@@ -432,7 +438,9 @@ impl Graph {
     /// junctions whose two other branches both run on into it (within
     /// [`SPLIT_CONTINUE_RAD`]): the shape of two cables crossing at a
     /// shallow angle (or running together for a while), unlike a cable end
-    /// touching another's side.
+    /// touching another's side. So are two 3-way junctions joined by that
+    /// short edge and a run [`LOOP_TO_OVERLAP`] times longer: a cable
+    /// looping across itself.
     fn merge_junctions(&mut self, width_px: f64) -> Vec<usize> {
         let mut parent: Vec<usize> = (0..self.nodes.len()).collect();
         fn root(parent: &mut [usize], mut i: usize) -> usize {
@@ -450,7 +458,16 @@ impl Graph {
             }
         }
         let is_junction = |n: usize| self.nodes[n].kind == NodeKind::Junction;
+        let mut runs_between: HashMap<(usize, usize), Vec<f64>> = HashMap::new();
+        for edge in self.edges.iter().filter(|e| e.alive) {
+            let [a, b] = edge.ends;
+            runs_between
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push(edge.length_px);
+        }
         let mut merge = Vec::new();
+        let mut loop_overlaps = Vec::new();
         for (e, edge) in self.edges.iter().enumerate() {
             let [a, b] = edge.ends;
             if !edge.alive || !is_junction(a) || !is_junction(b) {
@@ -471,10 +488,33 @@ impl Graph {
                             < SPLIT_CONTINUE_RAD
                     })
                 });
+            // Joined by this run and a far longer one: a cable that loops
+            // back across itself at a shallow angle, this run where its two
+            // strands overlap. (Two cables crossing twice join their
+            // crossings by runs of like length.)
+            let loop_overlap = a != b
+                && edge.length_px < SPLIT_CROSSING_WIDTHS * width_px
+                && incident[a].len() == 3
+                && incident[b].len() == 3
+                && match runs_between[&(a.min(b), a.max(b))][..] {
+                    [r, s] => r.max(s) > LOOP_TO_OVERLAP * r.min(s),
+                    _ => false,
+                };
             if short || split_crossing {
                 merge.push(e);
+            } else if loop_overlap {
+                loop_overlaps.push(e);
             }
         }
+        // A loop's overlap is one crossing only between junctions that are
+        // no part of another: when the loop passes through a crossing with
+        // another cable, the far longer run may be the rest of the loop
+        // beyond it.
+        let merged: HashSet<usize> = merge.iter().flat_map(|&e| self.edges[e].ends).collect();
+        merge.extend(loop_overlaps.into_iter().filter(|&e| {
+            let [a, b] = self.edges[e].ends;
+            !merged.contains(&a) && !merged.contains(&b)
+        }));
         for e in merge {
             let [a, b] = self.edges[e].ends;
             let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
@@ -690,6 +730,26 @@ fn add_colour_costs(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
     }
 }
 
+/// Forbids pairing a crossing's two branches that are the ends of one edge,
+/// when the crossing has four branches: a cable that loops back across
+/// itself leaves the crossing along the loop and returns along it, so
+/// joining the loop's two ends would close it into a ring with no ends,
+/// which no cable is, and leave the rest of the cable as another. Where
+/// more cables' crossings are merged into one junction, such an edge may
+/// run between two of them, and the bends measured at one centre decide.
+fn forbid_closing_loops(cost: &mut [Vec<f64>], branches: &[Branch]) {
+    if branches.len() != 4 {
+        return;
+    }
+    for (i, a) in branches.iter().enumerate() {
+        for (j, b) in branches.iter().enumerate() {
+            if i != j && a.0 == b.0 {
+                cost[i][j] = f64::INFINITY;
+            }
+        }
+    }
+}
+
 /// Least total cost pairing of `k` branches where `cost[i][j]` is the cost
 /// of joining i and j (their bend, plus any colour difference's cost) and
 /// leaving one unpaired costs [`UNPAIRED_COST_RAD`].
@@ -835,6 +895,7 @@ pub fn paths_from_mask(
                 let colours = branch_colours_lab(&outward, image, width_px)?;
                 add_colour_costs(&mut cost, &colours);
             }
+            forbid_closing_loops(&mut cost, list);
             best_pairing(&cost)
         };
         for (a, b) in pairs {
