@@ -458,14 +458,14 @@ impl Graph {
             }
         }
         let is_junction = |n: usize| self.nodes[n].kind == NodeKind::Junction;
-        let mut runs_between: HashMap<(usize, usize), Vec<f64>> = HashMap::new();
-        for edge in self.edges.iter().filter(|e| e.alive) {
-            let [a, b] = edge.ends;
-            runs_between
-                .entry((a.min(b), a.max(b)))
-                .or_default()
-                .push(edge.length_px);
-        }
+        // The lengths of the runs of skeleton from junction `a` to `b`.
+        let runs_between = |a: usize, b: usize| -> Vec<f64> {
+            incident[a]
+                .iter()
+                .filter(|&&(e, side)| self.edges[e].ends[1 - side] == b)
+                .map(|&(e, _)| self.edges[e].length_px)
+                .collect()
+        };
         let mut merge = Vec::new();
         let mut loop_overlaps = Vec::new();
         for (e, edge) in self.edges.iter().enumerate() {
@@ -496,7 +496,7 @@ impl Graph {
                 && edge.length_px < SPLIT_CROSSING_WIDTHS * width_px
                 && incident[a].len() == 3
                 && incident[b].len() == 3
-                && match runs_between[&(a.min(b), a.max(b))][..] {
+                && match runs_between(a, b)[..] {
                     [r, s] => r.max(s) > LOOP_TO_OVERLAP * r.min(s),
                     _ => false,
                 };
