@@ -9,7 +9,7 @@ use cablecell::perception::vision::{
 };
 use cablecell::sim::render::{
     Background, BackgroundChoice, CableSpec, Light, RenderedScene, SceneOptions, SceneSpec,
-    random_scene, render,
+    dataset_scene, random_scene, render,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -172,15 +172,6 @@ fn a_cable_on_clutter_is_found_by_the_network() {
     }
 }
 
-/// Image `index` of `cablecell render-dataset --seed SEED` with default
-/// options, as rendered (before it is written as a JPEG).
-fn dataset_scene(seed: u64, index: u64) -> RenderedScene {
-    let mut rng = rng(seed);
-    rng.set_stream(index);
-    let spec = random_scene(&mut rng, &SceneOptions::default());
-    render(&spec, &mut rng).expect("render")
-}
-
 #[test]
 fn loops_in_rendered_scenes_are_counted_right() {
     // 00087 of seed 21: a cable looping across itself at a shallow angle,
@@ -191,7 +182,9 @@ fn loops_in_rendered_scenes_are_counted_right() {
     // three cables at one junction, which forbidding a loop's ends to pair
     // at more than four branches got wrong.
     for (seed, index) in [(21, 87), (61, 169), (21, 53)] {
-        let (output, score) = detect(&dataset_scene(seed, index), MaskMethod::Auto);
+        // Image `index` of `cablecell render-dataset --seed SEED`.
+        let scene = dataset_scene(seed, index, &SceneOptions::default()).expect("render");
+        let (output, score) = detect(&scene, MaskMethod::Auto);
         assert!(
             score.count_right,
             "seed {seed}, image {index}: {} found, {score:?}",

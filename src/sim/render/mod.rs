@@ -722,13 +722,23 @@ pub fn write_dataset(
         source,
     })?;
     for index in 0..count {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        rng.set_stream(index as u64);
-        let scene = random_scene(&mut rng, options);
-        let rendered = render(&scene, &mut rng)?;
+        let rendered = dataset_scene(seed, index as u64, options)?;
         write_scene_files(dir, &format!("{index:05}"), &rendered)?;
     }
     Ok(())
+}
+
+/// Image `index` of the data set [`write_dataset`] writes for `seed` and
+/// `options`, as rendered (before it is written as a JPEG).
+pub fn dataset_scene(
+    seed: u64,
+    index: u64,
+    options: &SceneOptions,
+) -> Result<RenderedScene, RenderError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(index);
+    let scene = random_scene(&mut rng, options);
+    render(&scene, &mut rng)
 }
 
 /// Writes `rendered` into the existing folder `dir` as image `stem` of a
