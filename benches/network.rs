@@ -3,7 +3,8 @@
 //! threads, resize the probability up, threshold): what `SegmentationNet::
 //! mask` costs the detector per camera frame, at three input sizes, and
 //! the float network it was quantized from; and the whole pipeline with
-//! it, on the image and on the image enlarged to 1280 × 960. Uses the
+//! it, on the image and on the image enlarged to 1280 × 960 and
+//! 1920 × 1440. Uses the
 //! first held-out photograph of cables-dev when it lies beside the
 //! project, else a drawn image. The ONNX Runtime library comes from
 //! `ORT_DYLIB_PATH`, else from `.setup/onnxruntime/` (run `scripts/setup`).
@@ -84,32 +85,46 @@ fn bench(c: &mut Criterion) {
             b.iter(|| float.mask(std::hint::black_box(&image)).expect("inference"));
         },
     );
-    // Image in, grasp frames out, as the detector runs it; and from a
-    // camera twice as fine, whose image is worked on shrunk to 640 px wide
-    // (`VisionConfig::work_width_px`), what is found mapped back.
-    let mut fine = Mat::default();
-    imgproc::resize(
-        &image,
-        &mut fine,
-        Default::default(),
-        2.0,
-        2.0,
-        imgproc::INTER_CUBIC,
-    )
-    .expect("enlarging the bench image");
+    // Image in, grasp frames out, as the detector runs it; and from
+    // cameras two and three times as fine, whose images are worked on
+    // shrunk to 640 px wide (`VisionConfig::work_width_px`), what is found
+    // mapped back.
+    let enlarged = |k: f64| {
+        let mut fine = Mat::default();
+        imgproc::resize(
+            &image,
+            &mut fine,
+            Default::default(),
+            k,
+            k,
+            imgproc::INTER_CUBIC,
+        )
+        .expect("enlarging the bench image");
+        fine
+    };
     let mut pipeline = Pipeline::new(VisionConfig {
         mask: MaskMethod::Network,
         ..VisionConfig::default()
     });
     for (name, input) in [
-        ("whole pipeline 640x480 (network mask, skeleton)", &image),
-        ("whole pipeline 1280x960 (worked on at 640x480)", &fine),
+        (
+            "whole pipeline 640x480 (network mask, skeleton)",
+            image.clone(),
+        ),
+        (
+            "whole pipeline 1280x960 (worked on at 640x480)",
+            enlarged(2.0),
+        ),
+        (
+            "whole pipeline 1920x1440 (worked on at 640x480)",
+            enlarged(3.0),
+        ),
     ] {
         c.bench_function(name, |b| {
             b.iter(|| {
                 pipeline
                     .detect(
-                        std::hint::black_box(input),
+                        std::hint::black_box(&input),
                         Some(&mut net as &mut dyn MaskNetwork),
                     )
                     .expect("detect")

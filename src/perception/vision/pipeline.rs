@@ -309,10 +309,9 @@ impl Pipeline {
         }
         let mut union_mask = mask::zeros_u8(full.height, full.width)?;
         for cable in &found.cables {
-            let mut next = Mat::default();
-            core::bitwise_or(&union_mask, &cable.mask, &mut next, &core::no_array())
+            union_mask
+                .set_to(&Scalar::all(255.0), &cable.mask)
                 .map_err(cv("union of the cables' masks"))?;
-            union_mask = next;
         }
         Ok(VisionOutput {
             cables: found.cables,
@@ -431,7 +430,7 @@ impl Pipeline {
                 grasp_px,
                 direction_rad,
                 length_px: path.length_px * to_image.length_scale(),
-                mask: place(&*to_image_size(&own, roi)?, roi, full)?,
+                mask: mask_in_image(&own, roi, full)?,
             });
         }
         timings_ms.push(("instance_masks", ms_since(start)));
@@ -514,13 +513,55 @@ fn to_work_size(image: Cow<'_, Mat>, scale: f64) -> Result<Cow<'_, Mat>, VisionE
     Ok(Cow::Owned(resized))
 }
 
-/// A working-size cable mask brought to the size of `roi`, its edges
-/// following the cable rather than the working pixels' steps.
-fn to_image_size(mask: &Mat, roi: Rect) -> Result<Cow<'_, Mat>, VisionError> {
-    if (mask.cols(), mask.rows()) == (roi.width, roi.height) {
-        return Ok(Cow::Borrowed(mask));
+/// A cable's working-size mask `own`, of region `roi` of an image of
+/// extent `full`, in the full image: inside `roi`, what resizing the whole
+/// of `own` to `roi`'s size and cutting it at half gives (its edges follow
+/// the cable rather than the working pixels' steps); zero elsewhere. Only
+/// a box around the cable is resized, so that the cost grows with the
+/// cable rather than with the camera's resolution.
+fn mask_in_image(own: &Mat, roi: Rect, full: Rect) -> Result<Mat, VisionError> {
+    let mut out = mask::zeros_u8(full.height, full.width)?;
+    let found = imgproc::bounding_rect(own).map_err(cv("cable mask extent"))?;
+    if found.width <= 0 || found.height <= 0 {
+        return Ok(out);
     }
-    mask::resize_and_cut(mask, roi.size(), 127.0).map(Cow::Owned)
+    let (x, image_x) = resize_span(found.x, found.width, own.cols(), roi.width);
+    let (y, image_y) = resize_span(found.y, found.height, own.rows(), roi.height);
+    let part = Mat::roi(own, Rect::new(x.0, y.0, x.1 - x.0, y.1 - y.0))
+        .and_then(|m| m.try_clone())
+        .map_err(cv("box around a cable"))?;
+    let size = core::Size::new(image_x.1 - image_x.0, image_y.1 - image_y.0);
+    let resized = mask::resize_and_cut(&part, size, 127.0)?;
+    let to = Rect::new(
+        roi.x + image_x.0,
+        roi.y + image_y.0,
+        size.width,
+        size.height,
+    );
+    let mut dst = Mat::roi_mut(&mut out, to).map_err(cv("box around a cable in the image"))?;
+    resized
+        .copy_to(&mut dst)
+        .map_err(cv("place a cable's mask in the image"))?;
+    Ok(out)
+}
+
+/// Along one axis, the working pixels `[start, start + len)` grown to a
+/// span whose resize matches the whole row's: by a pixel each way (a
+/// bilinear resize reads one pixel beyond the one it lands on, and pixels
+/// next to the span are then zero in both), and out to working pixels
+/// whose edges map onto image pixels' edges (`work_px` working pixels
+/// span `image_px` image ones). Returns the span in working pixels and in
+/// image pixels.
+fn resize_span(start: i32, len: i32, work_px: i32, image_px: i32) -> ((i32, i32), (i32, i32)) {
+    let step = work_px / gcd(work_px, image_px);
+    let lo = (start - 1).max(0) / step * step;
+    let hi = ((start + len + 1 + step - 1) / step * step).min(work_px);
+    let to_image = |w: i32| (i64::from(w) * i64::from(image_px) / i64::from(work_px)) as i32;
+    ((lo, hi), (to_image(lo), to_image(hi)))
+}
+
+fn gcd(a: i32, b: i32) -> i32 {
+    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// How far from straight an edge's detection can be: mask noise and lens
@@ -581,19 +622,6 @@ pub(crate) fn draw_paths(
     )
     .map_err(cv("draw paths"))?;
     Ok(drawn)
-}
-
-/// A full-image copy of `part`, the contents of region `roi`, zero
-/// elsewhere.
-fn place(part: &Mat, roi: Rect, full: Rect) -> Result<Mat, VisionError> {
-    if roi == full {
-        return part.try_clone().map_err(cv("copy mask"));
-    }
-    let mut out = mask::zeros_u8(full.height, full.width)?;
-    let mut dst = Mat::roi_mut(&mut out, roi).map_err(cv("region of interest in full mask"))?;
-    part.copy_to(&mut dst)
-        .map_err(cv("place mask in full image"))?;
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -1247,6 +1275,58 @@ mod tests {
             );
             assert!(angle_diff_rad(f.direction_rad, w.direction_rad) < 0.01);
             assert!((f.length_px / w.length_px / k - 1.0).abs() < 0.02);
+        }
+    }
+
+    #[test]
+    fn a_cable_mask_resized_in_a_box_around_it_is_the_whole_resize() {
+        // The box is resized alone, so its pixels must be those of the
+        // whole working mask resized: at whole multiples, at ratios such as
+        // 480 : 2048 whose box sides must fall on whole image pixels, at
+        // none (640 : 641, the whole mask), shrunk, and inside a region of
+        // interest; for cables reaching the working mask's edges and
+        // corner, a lone pixel and no cable.
+        let cables: [&[[f64; 2]]; 3] = [
+            &[[0.0, 5.0], [200.0, 90.0], [350.0, 300.0]],
+            &[[639.0, 479.0], [600.0, 440.0]],
+            &[[410.0, 30.0], [410.0, 30.0]],
+        ];
+        let mut owns: Vec<Mat> = cables
+            .iter()
+            .map(|&c| draw_paths(480, 640, &[c], 7).unwrap())
+            .collect();
+        owns.push(draw_paths(480, 640, &[&[[77.0, 99.0]]], 1).unwrap());
+        owns.push(mask::zeros_u8(480, 640).unwrap());
+        for (cols, rows) in [
+            (1920, 1440),
+            (2448, 2048),
+            (641, 481),
+            (320, 240),
+            (1000, 750),
+        ] {
+            for (roi, full) in [
+                (Rect::new(0, 0, cols, rows), Rect::new(0, 0, cols, rows)),
+                (
+                    Rect::new(7, 3, cols, rows),
+                    Rect::new(0, 0, cols + 20, rows + 9),
+                ),
+            ] {
+                for own in &owns {
+                    let whole = mask::resize_and_cut(own, roi.size(), 127.0).unwrap();
+                    let mut expected = mask::zeros_u8(full.height, full.width).unwrap();
+                    whole
+                        .copy_to(&mut Mat::roi_mut(&mut expected, roi).unwrap())
+                        .unwrap();
+                    let boxed = mask_in_image(own, roi, full).unwrap();
+                    let mut differ = Mat::default();
+                    core::compare(&boxed, &expected, &mut differ, core::CMP_NE).unwrap();
+                    assert_eq!(
+                        core::count_non_zero(&differ).unwrap(),
+                        0,
+                        "{cols} x {rows} in {full:?}"
+                    );
+                }
+            }
         }
     }
 
