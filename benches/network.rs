@@ -85,10 +85,10 @@ fn bench(c: &mut Criterion) {
             b.iter(|| float.mask(std::hint::black_box(&image)).expect("inference"));
         },
     );
-    // Image in, grasp frames out, as the detector runs it; and from
-    // cameras two and three times as fine, whose images are worked on
-    // shrunk to 640 px wide (`VisionConfig::work_width_px`), what is found
-    // mapped back.
+    // Image in, grasp frames out, as the cell's detector runs it (no
+    // cable masks); and from cameras two and three times as fine, whose
+    // images are worked on shrunk to 640 px wide
+    // (`VisionConfig::work_width_px`), what is found mapped back.
     let enlarged = |k: f64| {
         let mut fine = Mat::default();
         imgproc::resize(
@@ -104,6 +104,7 @@ fn bench(c: &mut Criterion) {
     };
     let mut pipeline = Pipeline::new(VisionConfig {
         mask: MaskMethod::Network,
+        cable_masks: false,
         ..VisionConfig::default()
     });
     for (name, input) in [

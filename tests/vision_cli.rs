@@ -76,11 +76,14 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         (direction - expected).abs() < 0.05,
         "{direction} vs {expected}"
     );
-    assert!(
-        report["timings_ms"]
-            .as_array()
-            .is_some_and(|t| !t.is_empty())
-    );
+    let stages = |report: &serde_json::Value| -> Vec<String> {
+        let timings = report["timings_ms"].as_array().expect("timings");
+        timings
+            .iter()
+            .map(|t| t[0].as_str().expect("stage").to_owned())
+            .collect()
+    };
+    assert!(stages(report).contains(&"instance_masks".to_owned()));
     for file in ["one_mask_0.png", "one_mask_all.png"] {
         let mask =
             imgcodecs::imread(text(&masks.join(file)), imgcodecs::IMREAD_GRAYSCALE).expect("read");
@@ -91,6 +94,9 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     let by_default = cablecell(&["detect", text(&image), "--json"]);
     let reports: serde_json::Value = serde_json::from_slice(&by_default.stdout).expect("JSON");
     assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(0));
+    // Without `--masks` no cable's mask is drawn.
+    assert_eq!(stages(&reports[0]).len(), 4, "{:?}", stages(&reports[0]));
+    assert!(!stages(&reports[0]).contains(&"instance_masks".to_owned()));
     let notes = reports[0]["notes"].to_string();
     assert!(
         notes.contains("1 straight detection(s) as edges"),

@@ -341,7 +341,7 @@ fn held_out_real_photographs_through_the_pipeline() {
         let image = read(&data, &format!("{stem}.jpg"), imgcodecs::IMREAD_COLOR);
         let truth = GroundTruth::load(&data, &stem).unwrap();
         let output = pipeline.detect(&image, Some(&mut net)).unwrap();
-        let score = eval::score(&output, &truth);
+        let score = eval::score(&output, &truth).expect("the masks are drawn");
         eprintln!("{stem}: {score:?}");
         scores.push(score);
     }

@@ -247,7 +247,7 @@ proptest! {
             ..VisionConfig::default()
         });
         let out = pipeline.detect(&noisy, None).unwrap();
-        prop_assert_eq!(out.union_mask.size().unwrap(), mask.size().unwrap());
+        prop_assert_eq!(out.union_mask.as_ref().unwrap().size().unwrap(), mask.size().unwrap());
         for cable in &out.cables {
             prop_assert!(cable.direction_rad.is_finite());
             prop_assert!(cable.grasp_px.iter().all(|v| v.is_finite()));

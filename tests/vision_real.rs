@@ -77,7 +77,8 @@ fn instances_on_truth(method: InstanceMethod) -> Option<Vec<(String, ImageScore)
             .expect("instances from the true mask");
         scores.push((
             stem,
-            eval::score_cables(&found.cables, &truth.union_mask, &truth),
+            eval::score_cables(&found.cables, &truth.union_mask, &truth)
+                .expect("the masks are drawn"),
         ));
     }
     Some(scores)
@@ -162,7 +163,10 @@ fn classical_mask_finds_wires_on_white_paper() {
             "{stem}: judged plain: {:?}",
             out.background
         );
-        scores.push((stem, eval::score(&out, &truth)));
+        scores.push((
+            stem,
+            eval::score(&out, &truth).expect("the masks are drawn"),
+        ));
     }
     print_scores("classical", &scores);
     assert_eq!(scores.len(), 10);

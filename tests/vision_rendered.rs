@@ -32,7 +32,7 @@ fn detect(scene: &RenderedScene, mask: MaskMethod) -> (VisionOutput, ImageScore)
         union_mask: scene.union_mask.clone(),
         polylines_px: scene.centerlines_px.clone(),
     };
-    let score = score(&output, &truth);
+    let score = score(&output, &truth).expect("the masks are drawn");
     (output, score)
 }
 

@@ -73,7 +73,7 @@ pub fn detect(
             return Status::BadInput;
         }
     };
-    let mut pipeline = args.pipeline();
+    let mut pipeline = args.pipeline(masks.is_some());
     let mut network = args.network();
     let mut reports = Vec::new();
     let mut status = Status::Success;
@@ -232,13 +232,13 @@ fn write_outputs(
 ) -> Result<(), String> {
     if let Some(dir) = masks {
         create_dir(dir)?;
+        let not_drawn = || format!("{stem}: the pipeline drew no cable masks to write");
         for (k, cable) in output.cables.iter().enumerate() {
-            write_png(&dir.join(format!("{stem}_mask_{k}.png")), &cable.mask)?;
+            let own = cable.mask.as_ref().ok_or_else(not_drawn)?;
+            write_png(&dir.join(format!("{stem}_mask_{k}.png")), own)?;
         }
-        write_png(
-            &dir.join(format!("{stem}_mask_all.png")),
-            &output.union_mask,
-        )?;
+        let union_mask = output.union_mask.as_ref().ok_or_else(not_drawn)?;
+        write_png(&dir.join(format!("{stem}_mask_all.png")), union_mask)?;
     }
     if let Some(dir) = overlay {
         create_dir(dir)?;

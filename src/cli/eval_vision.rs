@@ -246,7 +246,7 @@ fn evaluate(
     if let Some(dir) = overlay {
         create_dir(dir)?;
     }
-    let mut pipeline = vision.pipeline();
+    let mut pipeline = vision.pipeline(true);
     let mut network = vision.network();
     let mut per_image = Vec::new();
     let mut notes = Vec::new();
@@ -268,7 +268,8 @@ fn evaluate(
             .entry("total")
             .or_default()
             .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
-        let image_score = score(&output, &sample.truth);
+        let image_score = score(&output, &sample.truth)
+            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
         if let Some(dir) = overlay {
             let drawn = draw_comparison(&sample.image, &output, &sample.truth, &image_score)
                 .map_err(|e| format!("cannot draw the overlay of {}: {e}", sample.stem))?;

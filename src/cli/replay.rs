@@ -80,7 +80,7 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
         }
     };
     println!("vision again on the recorded images ({}):", images.len());
-    let mut pipeline = args.pipeline();
+    let mut pipeline = args.pipeline(false);
     let mut network = args.network();
     let mut status = Status::Success;
     for message in &images {

@@ -113,7 +113,9 @@ pub enum InstancesArg {
 }
 
 impl VisionArgs {
-    pub fn pipeline(&self) -> Pipeline {
+    /// The pipeline these arguments ask for; `cable_masks`: whether the
+    /// command needs each cable's mask (see [`VisionConfig::cable_masks`]).
+    pub fn pipeline(&self, cable_masks: bool) -> Pipeline {
         let config = VisionConfig {
             mask: match self.mask {
                 MaskArg::Auto => MaskMethod::Auto,
@@ -129,6 +131,7 @@ impl VisionArgs {
             min_cable_length_px: self.min_length_px,
             min_border_cable_length_px: self.min_border_length_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
+            cable_masks,
             ..VisionConfig::default()
         };
         Pipeline::new(config)

@@ -733,6 +733,8 @@ impl VisionDetectorConfig {
                 .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
             work_width_px: self.work_width_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
+            // The cell needs grasp frames only.
+            cable_masks: false,
             ..VisionConfig::default()
         }
     }

@@ -98,6 +98,11 @@ pub enum VisionError {
     /// A ground-truth entry has no per-cable masks (`STEM_mask_0.png`).
     #[error("ground truth for {stem} in {dir}: no per-cable masks ({stem}_mask_0.png)")]
     NoTruthMasks { dir: PathBuf, stem: String },
+
+    /// Scoring needs the cables' masks, which the pipeline was set not to
+    /// draw.
+    #[error("no cable masks to score: the pipeline ran with cable_masks off")]
+    NoCableMasks,
 }
 
 /// Wraps an OpenCV error with the stage it happened in, for `map_err`.

@@ -489,14 +489,27 @@ fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| sum / n as f64)
 }
 
-/// Scores a pipeline output against the truth.
-pub fn score(output: &VisionOutput, truth: &GroundTruth) -> ImageScore {
-    score_cables(&output.cables, &output.union_mask, truth)
+/// Scores a pipeline output, its cables' masks drawn, against the truth.
+pub fn score(output: &VisionOutput, truth: &GroundTruth) -> Result<ImageScore, VisionError> {
+    let union_mask = output
+        .union_mask
+        .as_ref()
+        .ok_or(VisionError::NoCableMasks)?;
+    score_cables(&output.cables, union_mask, truth)
 }
 
-/// Scores instances and a union mask against the truth (for results that
-/// did not come from [`Pipeline::detect`](super::Pipeline::detect)).
-pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTruth) -> ImageScore {
+/// Scores instances, their masks drawn, and a union mask against the truth
+/// (for results that did not come from
+/// [`Pipeline::detect`](super::Pipeline::detect)).
+pub fn score_cables(
+    cables: &[CableInstance],
+    union_mask: &Mat,
+    truth: &GroundTruth,
+) -> Result<ImageScore, VisionError> {
+    let masks = cables
+        .iter()
+        .map(|c| c.mask.as_ref().ok_or(VisionError::NoCableMasks))
+        .collect::<Result<Vec<&Mat>, _>>()?;
     let (inter, np, nt) = overlap(union_mask, &truth.union_mask);
     let union = np + nt - inter;
     let union_iou = if union > 0.0 { inter / union } else { 1.0 };
@@ -508,8 +521,8 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
 
     let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
     for (t, tm) in truth.masks.iter().enumerate() {
-        for (p, cable) in cables.iter().enumerate() {
-            let d = dice(&cable.mask, tm);
+        for (p, own) in masks.iter().enumerate() {
+            let d = dice(own, tm);
             if d > 0.0 {
                 pairs.push((d, t, p));
             }
@@ -541,7 +554,7 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         .map(|p| Unmatched {
             index: p,
             length_px: Some(polyline_length(&cables[p].samples_px)),
-            at_border: reaches_border(&cables[p].mask),
+            at_border: reaches_border(masks[p]),
         })
         .collect();
     let truth_count = truth.masks.len();
@@ -569,7 +582,7 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         length_near(&truth.polylines_px, &found_lines);
     let (found_length_px, found_length_labelled_px) =
         length_near(&found_lines, &truth.polylines_px);
-    ImageScore {
+    Ok(ImageScore {
         union_iou,
         union_dice,
         instance_dice,
@@ -586,7 +599,7 @@ pub fn score_cables(cables: &[CableInstance], union_mask: &Mat, truth: &GroundTr
         found_length_labelled_px,
         mask_offset_px,
         union_dice_at_offset,
-    }
+    })
 }
 
 /// Scores over a data set: means of the per-image scores (the distance
@@ -780,7 +793,7 @@ mod tests {
             grasp_px: samples_px[10],
             direction_rad: 0.0,
             length_px: polyline_length(&samples_px),
-            mask: draw_paths(120, 160, &[samples_px.as_slice()], 7).unwrap(),
+            mask: Some(draw_paths(120, 160, &[samples_px.as_slice()], 7).unwrap()),
             samples_px,
         }
     }
@@ -840,7 +853,7 @@ mod tests {
             // Along the second cable, but 6 px beside it.
             found_along([10.0, 106.0], [150.0, 106.0]),
         ];
-        let score = score_cables(&cables, &truth.union_mask, &truth);
+        let score = score_cables(&cables, &truth.union_mask, &truth).unwrap();
         let near = |a: f64, b: f64| (a - b).abs() < 1e-9;
         assert!(near(score.labelled_length_px, 280.0), "{score:?}");
         // 70 px beside the found half, and 4 px past its end, where the
@@ -849,7 +862,7 @@ mod tests {
         assert!(near(score.found_length_px, 310.0), "{score:?}");
         assert!(near(score.found_length_labelled_px, 70.0), "{score:?}");
 
-        let none = score_cables(&[], &truth.union_mask, &truth);
+        let none = score_cables(&[], &truth.union_mask, &truth).unwrap();
         assert_eq!(none.labelled_length_found_px, 0.0);
         assert_eq!(none.found_length_px, 0.0);
     }

@@ -79,6 +79,11 @@ pub struct VisionConfig {
     /// Superpixel side in cable widths for [`InstanceMethod::Superpixels`]
     /// (smaller: more superpixels, slower).
     pub superpixel_widths: f64,
+    /// Draw each cable's mask and their union, in the image's size, for
+    /// writing and scoring them. Grasp frames need neither, and at
+    /// 1920 × 1440 the masks take about as long as the network, so the
+    /// cell's detector leaves them out.
+    pub cable_masks: bool,
 }
 
 impl Default for VisionConfig {
@@ -94,6 +99,7 @@ impl Default for VisionConfig {
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
             superpixel_widths: super::superpixels::DEFAULT_REGION_WIDTHS,
+            cable_masks: true,
         }
     }
 }
@@ -124,9 +130,9 @@ pub struct CableInstance {
     /// Length of the skeleton path the spline was fitted to.
     pub length_px: f64,
     /// This cable's pixels: CV_8U 0/255, the image's size (cables overlap
-    /// at crossings).
+    /// at crossings); `None` unless [`VisionConfig::cable_masks`].
     #[serde(skip)]
-    pub mask: Mat,
+    pub mask: Option<Mat>,
 }
 
 /// What the pipeline found, and how.
@@ -142,15 +148,15 @@ pub struct VisionOutput {
     pub background: BackgroundStats,
     /// The union of the cables' masks: CV_8U 0/255, the image's size.
     /// Mask pixels no cable took (scraps, stubs at the border) are not in
-    /// it.
-    pub union_mask: Mat,
+    /// it. `None` unless [`VisionConfig::cable_masks`].
+    pub union_mask: Option<Mat>,
     /// The cables' typical width (mask area over skeleton length).
     pub cable_width_px: f64,
     /// The image's size as worked on over its own (see
     /// [`VisionConfig::work_width_px`]).
     pub work_scale: f64,
     /// Milliseconds per stage, in order: "prepare", "mask", "instances",
-    /// "spline", "instance_masks".
+    /// "spline", and "instance_masks" when the cables' masks are drawn.
     pub timings_ms: Vec<(&'static str, f64)>,
     /// What a user should know about this run (fallbacks taken,
     /// detections dropped as edges or as cables too little in view).
@@ -169,7 +175,8 @@ pub struct MaskInstances {
     /// Paths dropped as running out of view too short (see
     /// [`VisionConfig::min_border_cable_length_px`]).
     pub border_dropped: usize,
-    /// Milliseconds for "instances", "spline", "instance_masks".
+    /// Milliseconds for "instances", "spline", and "instance_masks" when
+    /// the cables' masks are drawn.
     pub timings_ms: Vec<(&'static str, f64)>,
 }
 
@@ -307,12 +314,17 @@ impl Pipeline {
                 found.border_dropped, self.config.min_border_cable_length_px
             ));
         }
-        let mut union_mask = mask::zeros_u8(full.height, full.width)?;
-        for cable in &found.cables {
-            union_mask
-                .set_to(&Scalar::all(255.0), &cable.mask)
-                .map_err(cv("union of the cables' masks"))?;
-        }
+        let union_mask = if self.config.cable_masks {
+            let mut union_mask = mask::zeros_u8(full.height, full.width)?;
+            for own in found.cables.iter().filter_map(|c| c.mask.as_ref()) {
+                union_mask
+                    .set_to(&Scalar::all(255.0), own)
+                    .map_err(cv("union of the cables' masks"))?;
+            }
+            Some(union_mask)
+        } else {
+            None
+        };
         Ok(VisionOutput {
             cables: found.cables,
             mask_used,
@@ -423,17 +435,24 @@ impl Pipeline {
         let thickness = (1.5 * found.width_px).ceil().max(1.0) as i32 + 2;
         let mut cables = Vec::with_capacity(fitted.len());
         for (path, spline, samples_px, grasp_px, direction_rad) in fitted {
-            let own = path_mask(mask_roi, &path.points_px, thickness)?;
+            let mask = if self.config.cable_masks {
+                let own = path_mask(mask_roi, &path.points_px, thickness)?;
+                Some(mask_in_image(&own, roi, full)?)
+            } else {
+                None
+            };
             cables.push(CableInstance {
                 spline,
                 samples_px,
                 grasp_px,
                 direction_rad,
                 length_px: path.length_px * to_image.length_scale(),
-                mask: mask_in_image(&own, roi, full)?,
+                mask,
             });
         }
-        timings_ms.push(("instance_masks", ms_since(start)));
+        if self.config.cable_masks {
+            timings_ms.push(("instance_masks", ms_since(start)));
+        }
         Ok(MaskInstances {
             cables,
             cable_width_px: found.width_px * to_image.length_scale(),
@@ -778,8 +797,28 @@ mod tests {
         let out = detect(&scene.bgr, keep_straight());
         assert_each_followed(&out, &[a, b], 3.0);
         for c in &out.cables {
-            assert_eq!(c.mask.size().unwrap(), scene.bgr.size().unwrap());
-            assert!(core::count_non_zero(&c.mask).unwrap() > 1000);
+            let own = c.mask.as_ref().unwrap();
+            assert_eq!(own.size().unwrap(), scene.bgr.size().unwrap());
+            assert!(core::count_non_zero(own).unwrap() > 1000);
+        }
+        // Without the masks, the same grasp frames.
+        let bare = detect(
+            &scene.bgr,
+            VisionConfig {
+                cable_masks: false,
+                ..keep_straight()
+            },
+        );
+        assert!(bare.union_mask.is_none());
+        assert!(
+            bare.timings_ms
+                .iter()
+                .all(|(stage, _)| *stage != "instance_masks")
+        );
+        assert_eq!(bare.cables.len(), out.cables.len());
+        for (b, c) in bare.cables.iter().zip(&out.cables) {
+            assert!(b.mask.is_none());
+            assert_eq!((b.grasp_px, b.direction_rad), (c.grasp_px, c.direction_rad));
         }
     }
 
@@ -1171,8 +1210,9 @@ mod tests {
             (g[0] - mid[0]).hypot(g[1] - mid[1]) < 4.0,
             "{g:?} vs {mid:?}"
         );
-        assert_eq!(out.union_mask.size().unwrap(), scene.bgr.size().unwrap());
-        assert_eq!(*out.union_mask.at_2d::<u8>(50, 100).unwrap(), 0);
+        let union_mask = out.union_mask.as_ref().unwrap();
+        assert_eq!(union_mask.size().unwrap(), scene.bgr.size().unwrap());
+        assert_eq!(*union_mask.at_2d::<u8>(50, 100).unwrap(), 0);
         let off = VisionConfig {
             roi_px: Some(Rect::new(700, 500, 10, 10)),
             ..keep_straight()
@@ -1231,9 +1271,11 @@ mod tests {
             assert_found_alike(&out, &at_640, k);
             assert!((out.cable_width_px / at_640.cable_width_px - k).abs() < 0.05 * k);
             for (found, working) in out.cables.iter().zip(&at_640.cables) {
-                assert_eq!(found.mask.size().unwrap(), image.size().unwrap());
-                let area_ratio = f64::from(core::count_non_zero(&found.mask).unwrap())
-                    / f64::from(core::count_non_zero(&working.mask).unwrap());
+                let (found, working) = (found.mask.as_ref(), working.mask.as_ref());
+                let (found, working) = (found.unwrap(), working.unwrap());
+                assert_eq!(found.size().unwrap(), image.size().unwrap());
+                let area_ratio = f64::from(core::count_non_zero(found).unwrap())
+                    / f64::from(core::count_non_zero(working).unwrap());
                 assert!(
                     (area_ratio / (k * k) - 1.0).abs() < 0.12,
                     "mask area ratio {area_ratio} at {k}"
