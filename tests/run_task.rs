@@ -207,18 +207,7 @@ fn a_silent_tactile_sensor_is_a_device_fault_and_keeps_the_record() {
             "noise_fraction = 0.02\nsilent_after_frames = 55",
         )
     });
-    let out = cablecell(&[
-        "run",
-        "tasks/regrasp.toml",
-        "--cell",
-        cell.to_str().expect("utf-8"),
-        "--seed",
-        "1",
-        "--json",
-    ]);
-    assert_eq!(out.status.code(), Some(3));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(report["outcome"]["kind"], "fault");
+    let report = common::regrasp_fault_report(&cell);
     assert_eq!(report["outcome"]["device"], "tactile");
     assert_eq!(report["outcome"]["state"], "evaluate");
     let to: Vec<_> = report["transitions"]

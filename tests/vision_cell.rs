@@ -171,18 +171,7 @@ fn a_missing_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
     let path = common::sim_cell_copy(dir.path(), |text| {
         text.replace("cable_segmentation.onnx", "no-such-model.onnx")
     });
-    let out = cablecell(&[
-        "run",
-        "tasks/regrasp.toml",
-        "--cell",
-        path.to_str().expect("utf-8"),
-        "--seed",
-        "1",
-        "--json",
-    ]);
-    assert_eq!(out.status.code(), Some(3));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(report["outcome"]["kind"], "fault");
+    let report = common::regrasp_fault_report(&path);
     assert_eq!(report["outcome"]["state"], "detect");
     let reason = report["outcome"].to_string();
     assert!(reason.contains("no-such-model.onnx"), "{reason}");

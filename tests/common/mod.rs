@@ -52,6 +52,29 @@ pub fn sim_cell_copy(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
     path
 }
 
+/// The JSON report of the regrasp task (seed 1) run on the cell file
+/// `cell`, which must end in a device fault: exit status 3.
+pub fn regrasp_fault_report(cell: &Path) -> serde_json::Value {
+    let out = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--cell",
+        text(cell),
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["outcome"]["kind"], "fault");
+    report
+}
+
 /// σ of the oracle's miss across the cable and about the pad's normal.
 pub const ORACLE_NOISE: (f64, f64) = (3.0, 0.2);
 
