@@ -4,8 +4,12 @@
 //! short gap (a mask broken at a ferrule, a glint or a crossing) are joined
 //! into one cable, and short scraps are dropped.
 
-use opencv::core::Mat;
+use opencv::core::{Mat, Vec3b};
+use opencv::imgproc;
 use opencv::prelude::*;
+
+use super::error::{VisionError, cv};
+use super::spline::arc_lengths_px;
 
 /// Two paths whose ends lie at most this many cable widths (plus
 /// [`JOIN_GAP_EXTRA_PX`]) apart, and continue each other, are one cable
@@ -16,6 +20,18 @@ const JOIN_GAP_EXTRA_PX: f64 = 4.0;
 /// Paths continue each other when neither end, nor the step between them,
 /// turns by more than this.
 const JOIN_MAX_BEND_RAD: f64 = 0.45;
+/// ... or by more than this when the middle of the step lies on another
+/// cable (within half a width of its centre line, plus
+/// [`UNDER_EXTRA_PX`]) and, given the image, the two ends' colours differ
+/// by at most [`UNDER_MAX_DELTA_E`]: the cable passes under the other, its
+/// mask cut at the crossing by a shadow, and a cable may bend through a
+/// crossing (the skeleton pairs crossing branches up to the same bend).
+const JOIN_UNDER_MAX_BEND_RAD: f64 = 0.9;
+const UNDER_EXTRA_PX: f64 = 1.0;
+/// Colour difference (CIE76 ΔE, OpenCV's 8-bit Lab) up to which two ends
+/// can be one cable passing under another. An end's colour is read from
+/// one to three widths back from it, clear of the crossing's shadow.
+const UNDER_MAX_DELTA_E: f64 = 25.0;
 /// An end's direction is taken over this many cable widths of its path
 /// (at least [`JOIN_TANGENT_MIN_PX`]): long enough to ignore the ragged
 /// last pixels, short enough to follow a bend.
@@ -109,10 +125,15 @@ pub(super) fn tangent_span_px(width_px: f64) -> f64 {
 }
 
 /// Joins paths that continue each other across a short gap (see
-/// [`JOIN_GAP_WIDTHS`]), best-aligned pair first, until no pair does.
-/// Each path's ends are looked at in both directions, so the result may
-/// run either way.
-pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<Vec<[f64; 2]>> {
+/// [`JOIN_GAP_WIDTHS`]), or bend under another cable (see
+/// [`JOIN_UNDER_MAX_BEND_RAD`]; by shape alone without the BGR `image`),
+/// best-aligned pair first, until no pair does. Each path's ends are
+/// looked at in both directions, so the result may run either way.
+pub fn join_continuations(
+    mut paths: Vec<Vec<[f64; 2]>>,
+    image: Option<&Mat>,
+    width_px: f64,
+) -> Result<Vec<Vec<[f64; 2]>>, VisionError> {
     let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
     let span_px = tangent_span_px(width_px);
     loop {
@@ -145,13 +166,17 @@ pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<V
                 if gap_px > 0.5 * width_px.max(2.0) {
                     bend = bend.max(angle_rad(da, gap)).max(angle_rad(gap, onward));
                 }
-                if bend <= JOIN_MAX_BEND_RAD && best.is_none_or(|b| bend < b.0) {
+                let joins = bend <= JOIN_MAX_BEND_RAD
+                    || (bend <= JOIN_UNDER_MAX_BEND_RAD
+                        && passes_under(&paths, [i, j], pa, pb, width_px)
+                        && ends_alike(image, [&paths[i], &paths[j]], [ri, rj], width_px)?);
+                if joins && best.is_none_or(|b| bend < b.0) {
                     best = Some((bend, i, ri, j, rj));
                 }
             }
         }
         let Some((_, i, ri, j, rj)) = best else {
-            return paths;
+            return Ok(paths);
         };
         // Path i leaves through the joined end; path j enters through its.
         let mut second = paths.swap_remove(j);
@@ -164,6 +189,97 @@ pub fn join_continuations(mut paths: Vec<Vec<[f64; 2]>>, width_px: f64) -> Vec<V
         }
         first.extend(second);
     }
+}
+
+/// Whether the middle of the step from `a` to `b` lies on a path other
+/// than those numbered `ends` (see [`JOIN_UNDER_MAX_BEND_RAD`]).
+fn passes_under(
+    paths: &[Vec<[f64; 2]>],
+    ends: [usize; 2],
+    a: [f64; 2],
+    b: [f64; 2],
+    width_px: f64,
+) -> bool {
+    let middle = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    let reach_px = 0.5 * width_px + UNDER_EXTRA_PX;
+    paths.iter().enumerate().any(|(k, path)| {
+        !ends.contains(&k)
+            && path
+                .iter()
+                .any(|q| (q[0] - middle[0]).hypot(q[1] - middle[1]) <= reach_px)
+    })
+}
+
+/// Whether two paths' joined ends (the first point of a path whose
+/// `reversed` is set, else its last) have alike colours in `image` (see
+/// [`UNDER_MAX_DELTA_E`]); always without an image, never when an end is
+/// too short to show its colour.
+fn ends_alike(
+    image: Option<&Mat>,
+    paths: [&[[f64; 2]]; 2],
+    reversed: [bool; 2],
+    width_px: f64,
+) -> Result<bool, VisionError> {
+    let Some(image) = image else {
+        return Ok(true);
+    };
+    let mut colours = [None; 2];
+    for ((colour, path), reversed) in colours.iter_mut().zip(paths).zip(reversed) {
+        let from_end: Vec<[f64; 2]> = if reversed {
+            path.to_vec()
+        } else {
+            path.iter().rev().copied().collect()
+        };
+        let stretch: Vec<[f64; 2]> = from_end
+            .iter()
+            .zip(arc_lengths_px(&from_end))
+            .filter(|&(_, s_px)| (width_px..=3.0 * width_px).contains(&s_px))
+            .map(|(p, _)| *p)
+            .collect();
+        *colour = median_colour_lab(image, &stretch)?;
+    }
+    Ok(match colours {
+        [Some(a), Some(b)] => delta_e(a, b) <= UNDER_MAX_DELTA_E,
+        _ => false,
+    })
+}
+
+/// The colour of a BGR image under `points` (pixel centres inside it), in
+/// OpenCV's 8-bit Lab: the per-channel median, which a glint or a speck
+/// of the background does not move. `None` for no points.
+pub(super) fn median_colour_lab(
+    image: &Mat,
+    points: &[[f64; 2]],
+) -> Result<Option<[f64; 3]>, VisionError> {
+    if points.is_empty() {
+        return Ok(None);
+    }
+    let mut channels = [Vec::new(), Vec::new(), Vec::new()];
+    for p in points {
+        let bgr = image
+            .at_2d::<Vec3b>(p[1].round() as i32, p[0].round() as i32)
+            .map_err(cv("a cable's colour"))?;
+        for (channel, value) in channels.iter_mut().zip(bgr.0) {
+            channel.push(value);
+        }
+    }
+    let median = [Vec3b::from(channels.map(|mut c| {
+        c.sort_unstable();
+        c[c.len() / 2]
+    }))];
+    let pixel = Mat::from_slice(&median).map_err(cv("a cable's colour"))?;
+    let mut lab = Mat::default();
+    imgproc::cvt_color_def(&pixel, &mut lab, imgproc::COLOR_BGR2Lab)
+        .map_err(cv("a cable's colour to Lab"))?;
+    let lab = lab
+        .at_2d::<Vec3b>(0, 0)
+        .map_err(cv("a cable's colour to Lab"))?;
+    Ok(Some(lab.0.map(f64::from)))
+}
+
+/// The CIE76 colour difference of two Lab colours.
+pub(super) fn delta_e(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// Whether `p` lies within `margin_px` of the border of a mask of `size_px`
@@ -248,15 +364,17 @@ fn cut_at_border(
 
 /// The cables from pixel paths in `mask`, whichever method found them:
 /// paths cut where they run along the mask's border (see
-/// [`BORDER_CUT_WIDTHS`]), pieces that continue each other joined, each run
-/// from its end with the smaller (x, y) and kept if at least
-/// `min_length_px` long, sorted by their first point.
+/// [`BORDER_CUT_WIDTHS`]), pieces that continue each other joined (see
+/// [`join_continuations`], given the BGR `image` the mask was found in,
+/// if any), each run from its end with the smaller (x, y) and kept if at
+/// least `min_length_px` long, sorted by their first point.
 pub(super) fn finish_paths(
     paths: Vec<Vec<[f64; 2]>>,
     mask: &Mat,
+    image: Option<&Mat>,
     width_px: f64,
     min_length_px: f64,
-) -> FoundPaths {
+) -> Result<FoundPaths, VisionError> {
     let size_px = [f64::from(mask.cols()), f64::from(mask.rows())];
     let margin_px = BORDER_CUT_WIDTHS * width_px + BORDER_CUT_EXTRA_PX;
     let span_px = tangent_span_px(width_px);
@@ -264,7 +382,7 @@ pub(super) fn finish_paths(
         .into_iter()
         .flat_map(|path| cut_at_border(path, size_px, margin_px, span_px))
         .collect();
-    let paths = join_continuations(paths, width_px);
+    let paths = join_continuations(paths, image, width_px)?;
 
     let mut out: Vec<CablePath> = paths
         .into_iter()
@@ -286,16 +404,17 @@ pub(super) fn finish_paths(
             .partial_cmp(&(pb[0], pb[1]))
             .unwrap_or(std::cmp::Ordering::Equal)
     });
-    FoundPaths {
+    Ok(FoundPaths {
         paths: out,
         width_px,
-    }
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sim::render::fixtures::segment_px;
+    use opencv::core::{CV_8UC3, Point, Scalar};
 
     #[test]
     fn pieces_of_one_cable_across_a_gap_are_joined_in_order() {
@@ -304,7 +423,7 @@ mod tests {
             segment_px([200.0, 100.0], [120.0, 100.0]),
             segment_px([0.0, 100.0], [100.0, 100.0]),
         ];
-        let joined = join_continuations(pieces, 8.0);
+        let joined = join_continuations(pieces, None, 8.0).unwrap();
         assert_eq!(joined.len(), 1);
         let path = &joined[0];
         assert_eq!(path.len(), 101 + 81);
@@ -319,19 +438,74 @@ mod tests {
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([110.0, 110.0], [110.0, 200.0]),
         ];
-        assert_eq!(join_continuations(corner, 8.0).len(), 2);
+        assert_eq!(join_continuations(corner, None, 8.0).unwrap().len(), 2);
         let far = vec![
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([150.0, 100.0], [250.0, 100.0]),
         ];
-        assert_eq!(join_continuations(far, 8.0).len(), 2);
+        assert_eq!(join_continuations(far, None, 8.0).unwrap().len(), 2);
         // Side by side, parallel: their ends are close, but one does not
         // lead into the other.
         let parallel = vec![
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([105.0, 112.0], [200.0, 112.0]),
         ];
-        assert_eq!(join_continuations(parallel, 8.0).len(), 2);
+        assert_eq!(join_continuations(parallel, None, 8.0).unwrap().len(), 2);
+    }
+
+    /// Two pieces 24 px apart that turn by 0.6 rad (34°) between them, and
+    /// a cable across the middle of the gap.
+    fn bent_under() -> [Vec<[f64; 2]>; 3] {
+        let turn_rad: f64 = 0.6;
+        let before = segment_px([100.0, 0.0], [100.0, 88.0]);
+        let from = [100.0 + 24.0 * (turn_rad / 2.0).sin(), 112.0];
+        let to = [
+            from[0] + 90.0 * turn_rad.sin(),
+            from[1] + 90.0 * turn_rad.cos(),
+        ];
+        let across = segment_px([0.0, 100.0], [250.0, 100.0]);
+        [before, segment_px(from, to), across]
+    }
+
+    #[test]
+    fn a_cable_bending_under_another_is_joined_across_it() {
+        let [before, after, across] = bent_under();
+        let joined = |paths: Vec<Vec<[f64; 2]>>| join_continuations(paths, None, 8.0).unwrap();
+        // Nothing between them: a corner, two cables.
+        assert_eq!(joined(vec![before.clone(), after.clone()]).len(), 2);
+        // A cable across the gap's middle: one cable passing under it.
+        let found = joined(vec![before.clone(), across.clone(), after.clone()]);
+        assert_eq!(found.len(), 2);
+        assert!(found.contains(&across));
+        // The other cable only near the gap, not across it: still a corner.
+        let beside = segment_px([0.0, 130.0], [80.0, 130.0]);
+        assert_eq!(joined(vec![before, beside, after]).len(), 3);
+    }
+
+    #[test]
+    fn a_cable_is_joined_under_another_only_to_a_piece_of_its_colour() {
+        let [before, after, across] = bent_under();
+        let (blue, red) = (
+            Scalar::new(200.0, 60.0, 30.0, 0.0),
+            Scalar::new(30.0, 40.0, 210.0, 0.0),
+        );
+        for (after_bgr, pieces) in [(blue, 2), (red, 3)] {
+            let mut image =
+                Mat::new_rows_cols_with_default(240, 260, CV_8UC3, Scalar::all(128.0)).unwrap();
+            for (path, bgr) in [
+                (&before, blue),
+                (&after, after_bgr),
+                (&across, Scalar::all(20.0)),
+            ] {
+                for p in path {
+                    let centre = Point::new(p[0].round() as i32, p[1].round() as i32);
+                    imgproc::circle(&mut image, centre, 4, bgr, -1, imgproc::LINE_8, 0).unwrap();
+                }
+            }
+            let paths = vec![before.clone(), across.clone(), after.clone()];
+            let found = join_continuations(paths, Some(&image), 8.0).unwrap();
+            assert_eq!(found.len(), pieces);
+        }
     }
 
     /// A 640 × 480 mask's border cut at 6 px, directions over 16 px.

@@ -22,13 +22,15 @@
 
 use std::collections::{HashMap, HashSet};
 
-use opencv::core::{Mat, Vec3b};
-use opencv::imgproc;
+use opencv::core::Mat;
 use opencv::prelude::*;
 
 use super::error::{VisionError, cv};
 use super::mask::continuous;
-use super::paths::{FoundPaths, angle_rad, finish_paths, polyline_length, tangent_span_px, unit};
+use super::paths::{
+    FoundPaths, angle_rad, delta_e, finish_paths, median_colour_lab, polyline_length,
+    tangent_span_px, unit,
+};
 use super::spline::arc_lengths_px;
 
 /// Spurs shorter than this many cable widths (plus [`SPUR_EXTRA_PX`]) are
@@ -680,41 +682,6 @@ fn bend_rad(a: [f64; 2], b: [f64; 2]) -> f64 {
     cos.clamp(-1.0, 1.0).acos()
 }
 
-/// The colour of a BGR image under `points` (pixel centres inside it), in
-/// OpenCV's 8-bit Lab: the per-channel median, which a glint or a speck
-/// of the background does not move. `None` for no points.
-fn median_colour_lab(image: &Mat, points: &[[f64; 2]]) -> Result<Option<[f64; 3]>, VisionError> {
-    if points.is_empty() {
-        return Ok(None);
-    }
-    let mut channels = [Vec::new(), Vec::new(), Vec::new()];
-    for p in points {
-        let bgr = image
-            .at_2d::<Vec3b>(p[1].round() as i32, p[0].round() as i32)
-            .map_err(cv("a cable's colour"))?;
-        for (channel, value) in channels.iter_mut().zip(bgr.0) {
-            channel.push(value);
-        }
-    }
-    let median = [Vec3b::from(channels.map(|mut c| {
-        c.sort_unstable();
-        c[c.len() / 2]
-    }))];
-    let pixel = Mat::from_slice(&median).map_err(cv("a cable's colour"))?;
-    let mut lab = Mat::default();
-    imgproc::cvt_color_def(&pixel, &mut lab, imgproc::COLOR_BGR2Lab)
-        .map_err(cv("a cable's colour to Lab"))?;
-    let lab = lab
-        .at_2d::<Vec3b>(0, 0)
-        .map_err(cv("a cable's colour to Lab"))?;
-    Ok(Some(lab.0.map(f64::from)))
-}
-
-/// The CIE76 colour difference of two Lab colours.
-fn delta_e(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
-}
-
 /// Adds to each pairing's bend the cost of the two branches' colour
 /// difference (see [`COLOUR_COST_RAD`]); branches of unknown colour cost
 /// nothing more.
@@ -985,7 +952,7 @@ pub fn paths_from_mask(
         .into_iter()
         .flat_map(|path| cut_at_corners(path, span_px))
         .collect();
-    Ok(finish_paths(paths, mask, width_px, min_length_px))
+    finish_paths(paths, mask, image, width_px, min_length_px)
 }
 
 #[cfg(test)]

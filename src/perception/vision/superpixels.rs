@@ -293,5 +293,5 @@ pub fn paths_from_mask(
                 .collect(),
         );
     }
-    Ok(finish_paths(paths, mask, width_px, min_length_px))
+    finish_paths(paths, mask, Some(image), width_px, min_length_px)
 }
