@@ -20,12 +20,13 @@ const JOIN_GAP_EXTRA_PX: f64 = 4.0;
 /// Paths continue each other when neither end, nor the step between them,
 /// turns by more than this.
 const JOIN_MAX_BEND_RAD: f64 = 0.45;
-/// ... or by more than this when the middle of the step lies on another
-/// cable (within half a width of its centre line, plus
-/// [`UNDER_EXTRA_PX`]) and, given the image, the two ends' colours differ
-/// by at most [`UNDER_MAX_DELTA_E`]: the cable passes under the other, its
-/// mask cut at the crossing by a shadow, and a cable may bend through a
-/// crossing (the skeleton pairs crossing branches up to the same bend).
+/// Paths that turn by up to this also continue each other when the middle
+/// of the step lies on another cable (within half a width of its centre
+/// line, plus [`UNDER_EXTRA_PX`]) and, given the image, the two ends'
+/// colours differ by at most [`UNDER_MAX_DELTA_E`]: the cable passes under
+/// the other, its mask cut at the crossing by a shadow, and a cable may
+/// bend through a crossing (the skeleton pairs crossing branches up to the
+/// same bend).
 const JOIN_UNDER_MAX_BEND_RAD: f64 = 0.9;
 const UNDER_EXTRA_PX: f64 = 1.0;
 /// Colour difference (CIE76 ΔE, OpenCV's 8-bit Lab) up to which two ends
