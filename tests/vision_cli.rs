@@ -50,7 +50,8 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         false,
     );
     let (masks, overlay) = (dir.path().join("masks"), dir.path().join("overlay"));
-    // The drawn cable is ruler-straight: kept only when asked.
+    // The drawn cable is ruler-straight, but the table is alike on its two
+    // sides: a taut cable, not an edge.
     let reports = json_of(&[
         "detect",
         text(&image),
@@ -59,8 +60,6 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         text(&masks),
         "--overlay",
         text(&overlay),
-        "--straight-edge-radius-px",
-        "0",
     ]);
     let report = &reports[0];
     assert_eq!(report["mask_used"], "classical");
@@ -91,21 +90,16 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     }
     assert!(overlay.join("one.png").is_file());
 
-    let by_default = cablecell(&["detect", text(&image), "--json"]);
-    let reports: serde_json::Value = serde_json::from_slice(&by_default.stdout).expect("JSON");
-    assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(0));
     // Without `--masks` no cable's mask is drawn.
+    let reports = json_of(&["detect", text(&image), "--json"]);
+    assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(1));
     assert_eq!(stages(&reports[0]).len(), 4, "{:?}", stages(&reports[0]));
     assert!(!stages(&reports[0]).contains(&"instance_masks".to_owned()));
-    let notes = reports[0]["notes"].to_string();
-    assert!(
-        notes.contains("1 straight detection(s) as edges"),
-        "{notes}"
-    );
+    assert_eq!(reports[0]["notes"].as_array().map(Vec::len), Some(0));
 
     // Read by a person: the one-off start-up first, then the image's
     // warmed-up times.
-    let human = cablecell(&["detect", text(&image), "--straight-edge-radius-px", "0"]);
+    let human = cablecell(&["detect", text(&image)]);
     let printed = String::from_utf8_lossy(&human.stdout);
     let lines: Vec<&str> = printed.lines().collect();
     assert!(lines[0].starts_with("start-up: "), "{printed}");
@@ -326,13 +320,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         ],
         true,
     );
-    let e = json_of(&[
-        "eval-vision",
-        text(dir.path()),
-        "--json",
-        "--straight-edge-radius-px",
-        "0",
-    ]);
+    let e = json_of(&["eval-vision", text(dir.path()), "--json"]);
     assert_eq!(e["images"], 2);
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
     assert_eq!(e["count_right"]["successes"], 2, "{e}");
@@ -360,20 +348,28 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         labels["union_dice"]["mean"].as_f64().expect("dice") > 0.9,
         "{e}"
     );
-    // By default the drawn cables, ruler-straight, are dropped as edges,
-    // and the evaluation says so per image.
     let human = cablecell(&["eval-vision", text(dir.path())]);
     let printed = String::from_utf8_lossy(&human.stdout);
     assert!(printed.contains("instance count right"), "{printed}");
     assert!(printed.contains("labels' own union DICE"), "{printed}");
+    assert!(!printed.contains("count wrong in"), "{printed}");
+
+    // A labelled cable that runs out of view with only 60 px in it is
+    // dropped, too short to grasp: the evaluation says so per image.
+    write_scene(
+        dir.path(),
+        "00002",
+        vec![cable([-20.0, 240.0], [60.0, 240.0])],
+        true,
+    );
+    let human = cablecell(&["eval-vision", text(dir.path())]);
+    let printed = String::from_utf8_lossy(&human.stdout);
     assert!(
-        printed.contains(
-            "count wrong in         00000 (0 found, 1 labelled), 00001 (0 found, 2 labelled)"
-        ),
+        printed.contains("count wrong in         00002 (0 found, 1 labelled)"),
         "{printed}"
     );
     assert!(
-        printed.contains("note: 00001: dropped 2 straight detection(s) as edges"),
+        printed.contains("note: 00002: dropped 1 cable(s) that run out of view shorter than 80 px"),
         "{printed}"
     );
 }

@@ -68,7 +68,10 @@ pub struct VisionConfig {
     /// however short: the network takes edges of paper, folders and tables
     /// for cables, and a cable lying loose is never that straight (the
     /// straightest in cables-dev's training photographs bends like a 730 px
-    /// arc). 0 keeps every path: for a cell whose cable is held taut.
+    /// arc). On a plain background, such a path is kept when the background
+    /// is alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has
+    /// two different sides. 0 keeps every path: for a cell whose cable is
+    /// held taut.
     pub straight_edge_radius_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
     /// instances are looked for.
@@ -300,7 +303,7 @@ impl Pipeline {
         };
         timings_ms.push(("mask", ms_since(start)));
 
-        let found = self.cables_in(&work, &mask_roi, roi, full)?;
+        let found = self.cables_in(&work, &mask_roi, roi, full, background.plain)?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -352,19 +355,20 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, full, full)
+        self.cables_in(mask, mask, full, full, false)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
     /// `image_roi`, region `roi` of an image of extent `full`, perhaps
-    /// resized (see [`VisionConfig::work_width_px`]): what is found is
-    /// given in the image's pixels.
+    /// resized (see [`VisionConfig::work_width_px`]), on a plain background
+    /// or not: what is found is given in the image's pixels.
     fn cables_in(
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
         roi: Rect,
         full: Rect,
+        plain_background: bool,
     ) -> Result<MaskInstances, VisionError> {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
@@ -414,7 +418,9 @@ impl Pipeline {
                 &samples_px,
                 path.length_px,
                 self.config.straight_edge_radius_px,
-            ) {
+            ) && !(plain_background
+                && sides_alike(image_roi, mask_roi, &samples_px, found.width_px)?)
+            {
                 straight_dropped += 1;
                 continue;
             }
@@ -603,6 +609,73 @@ fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bo
         && sagitta_px < EDGE_MAX_SAGITTA_PX
         && (sagitta_px < EDGE_NOISE_SAGITTA_PX
             || spline::arc_radius_px(length_px, sagitta_px) > radius_px)
+}
+
+/// On a plain background, a straight detection is a cable, not an edge,
+/// when the background's colours either side of it differ by less than
+/// this share of the smaller difference between the detection and either
+/// side. An edge's sides differ: the paper and table edges taken for
+/// cables in cables-dev's photographs (on busy backgrounds) score 1.0 and
+/// 1.25. A cable's do not: the rendered straight cables kept on plain
+/// backgrounds are the same at any share from 0.3 to 1.5.
+const EDGE_SIDES_RATIO: f64 = 0.5;
+/// Where each side's background is read, in cable widths from the
+/// detection's centre line: clear of the cable and its shading.
+const SIDE_OFFSETS_WIDTHS: [f64; 2] = [1.0, 1.5];
+
+/// Whether the BGR `image`'s background, off `mask`, is alike on the two
+/// sides of a detection (points along it, cables `width_px` wide; see
+/// [`EDGE_SIDES_RATIO`]). Not when a side or the image's colour is
+/// unknown.
+fn sides_alike(
+    image: &Mat,
+    mask: &Mat,
+    points_px: &[[f64; 2]],
+    width_px: f64,
+) -> Result<bool, VisionError> {
+    if image.channels() != 3 {
+        return Ok(false);
+    }
+    let in_image = |p: &[f64; 2]| {
+        (0.0..f64::from(image.cols())).contains(&p[0].round())
+            && (0.0..f64::from(image.rows())).contains(&p[1].round())
+    };
+    let in_background = |p: [f64; 2]| {
+        in_image(&p)
+            && mask
+                .at_2d::<u8>(p[1].round() as i32, p[0].round() as i32)
+                .is_ok_and(|&v| v == 0)
+    };
+    let mut sides = [Vec::new(), Vec::new()];
+    for w in points_px.windows(3) {
+        let Some(along) = paths::unit(w[0], w[2]) else {
+            continue;
+        };
+        let across = [-along[1], along[0]];
+        for offset in SIDE_OFFSETS_WIDTHS.map(|k| k * width_px) {
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                let p = [
+                    w[1][0] + sign * offset * across[0],
+                    w[1][1] + sign * offset * across[1],
+                ];
+                if in_background(p) {
+                    side.push(p);
+                }
+            }
+        }
+    }
+    let on_image: Vec<[f64; 2]> = points_px.iter().copied().filter(in_image).collect();
+    let [left, right] = &sides;
+    let colours = (
+        paths::median_colour_lab(image, left)?,
+        paths::median_colour_lab(image, right)?,
+        paths::median_colour_lab(image, &on_image)?,
+    );
+    let (Some(left), Some(right), Some(middle)) = colours else {
+        return Ok(false);
+    };
+    let to_middle = paths::delta_e(middle, left).min(paths::delta_e(middle, right));
+    Ok(paths::delta_e(left, right) < EDGE_SIDES_RATIO * to_middle)
 }
 
 /// The pixels of `mask` within `thickness` of the path.
@@ -1462,12 +1535,12 @@ mod tests {
     }
 
     #[test]
-    fn a_straight_detection_is_dropped_as_an_edge_unless_asked_to_keep_it() {
+    fn a_straight_detection_is_dropped_as_an_edge_unless_its_sides_are_alike() {
         use std::f64::consts::FRAC_PI_2;
-        // A ruler-straight 300 px line; a 110 px piece of cable bent like a
-        // 600 px arc (2.5 px from straight); a 420 px cable bowed like a
-        // 3000 px arc (7 px from straight).
-        let edge = segment_px([100.0, 80.0], [400.0, 80.0]);
+        // A ruler-straight 300 px line 30 px from the top; a 110 px piece
+        // of cable bent like a 600 px arc (2.5 px from straight); a 420 px
+        // cable bowed like a 3000 px arc (7 px from straight).
+        let straight = segment_px([100.0, 30.0], [400.0, 30.0]);
         let short_bent = arc_px([450.0, 900.0], 600.0, -FRAC_PI_2 - 0.09, -FRAC_PI_2 + 0.09);
         let long_bowed = arc_px(
             [320.0, 3400.0],
@@ -1475,18 +1548,51 @@ mod tests {
             -FRAC_PI_2 - 0.07,
             -FRAC_PI_2 + 0.07,
         );
-        let cables = [edge, short_bent, long_bowed];
-        let scene = on_gray_table(cables.iter().map(|c| cable(c.clone(), [20; 3])).collect());
+        let lines = [straight, short_bent, long_bowed];
+
+        // Drawn as a cable on an even table, the straight line is a taut
+        // cable: the table is alike on its two sides.
+        let scene = on_gray_table(lines.iter().map(|c| cable(c.clone(), [20; 3])).collect());
         let out = detect(&scene.bgr, VisionConfig::default());
-        assert_each_followed(&out, &cables[1..], 2.5);
+        assert!(out.plain_background, "{:?}", out.background);
+        assert_each_followed(&out, &lines, 2.5);
+        assert!(out.notes.is_empty(), "{:?}", out.notes);
+
+        // The edge of a white sheet along the straight line, which a
+        // network took for a cable: the table differs on its two sides.
+        let scene = on_gray_table(
+            lines[1..]
+                .iter()
+                .map(|c| cable(c.clone(), [20; 3]))
+                .collect(),
+        );
+        let mut sheet_edge = scene.bgr.clone();
+        Mat::roi_mut(&mut sheet_edge, Rect::new(0, 0, 640, 30))
+            .unwrap()
+            .set_to_def(&Scalar::all(250.0))
+            .unwrap();
+        let mut known = scene.union_mask.clone();
+        let band = draw_paths(480, 640, &[&lines[0]], 8).unwrap();
+        core::bitwise_or_def(&scene.union_mask, &band, &mut known).unwrap();
+        let by_network = |config: VisionConfig| {
+            let mut net = KnownMask(known.clone());
+            let config = VisionConfig {
+                mask: MaskMethod::Network,
+                ..config
+            };
+            Pipeline::new(config)
+                .detect(&sheet_edge, Some(&mut net))
+                .unwrap()
+        };
+        let out = by_network(VisionConfig::default());
+        assert!(out.plain_background, "{:?}", out.background);
+        assert_each_followed(&out, &lines[1..], 2.5);
         assert!(
             out.notes.iter().any(|n| n.contains("1 straight detection")),
             "{:?}",
             out.notes
         );
-        let kept = detect(&scene.bgr, keep_straight());
-        assert_each_followed(&kept, &cables, 2.5);
-        assert!(kept.notes.is_empty(), "{:?}", kept.notes);
+        assert_each_followed(&by_network(keep_straight()), &lines, 2.5);
     }
 
     #[test]
