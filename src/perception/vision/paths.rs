@@ -167,11 +167,16 @@ pub fn join_continuations(
                 if gap_px > 0.5 * width_px.max(2.0) {
                     bend = bend.max(angle_rad(da, gap)).max(angle_rad(gap, onward));
                 }
+                // Only a pair better than the best so far is worth the
+                // look under a cable, which reads the image.
+                if best.is_some_and(|b| bend >= b.0) {
+                    continue;
+                }
                 let joins = bend <= JOIN_MAX_BEND_RAD
                     || (bend <= JOIN_UNDER_MAX_BEND_RAD
                         && passes_under(&paths, [i, j], pa, pb, width_px)
                         && ends_alike(image, [&paths[i], &paths[j]], [ri, rj], width_px)?);
-                if joins && best.is_none_or(|b| bend < b.0) {
+                if joins {
                     best = Some((bend, i, ri, j, rj));
                 }
             }
