@@ -575,7 +575,8 @@ pub struct VisionDetectorConfig {
     pub work_width_px: u32,
     /// Detections straighter than an arc of this radius (px), or within
     /// 1.5 px of straight, are dropped as edges of paper and tables, on a
-    /// plain background only when their two sides differ (default
+    /// plain background (a light's falloff aside) only when their two
+    /// sides differ (default
     /// [`VisionConfig::straight_edge_radius_px`]); 0 keeps them: a cable
     /// held taut between supports is straight.
     #[serde(

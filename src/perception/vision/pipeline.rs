@@ -68,9 +68,10 @@ pub struct VisionConfig {
     /// however short: the network takes edges of paper, folders and tables
     /// for cables, and a cable lying loose is never that straight (the
     /// straightest in cables-dev's training photographs bends like a 730 px
-    /// arc). On a plain background, such a path is kept when the background
-    /// is alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has
-    /// two different sides. 0 keeps every path: for a cell whose cable is
+    /// arc). On a background plain around each pixel (see
+    /// [`mask::plain_locally`]), such a path is kept when the background is
+    /// alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has two
+    /// different sides. 0 keeps every path: for a cell whose cable is
     /// held taut.
     pub straight_edge_radius_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
@@ -303,7 +304,7 @@ impl Pipeline {
         };
         timings_ms.push(("mask", ms_since(start)));
 
-        let found = self.cables_in(&work, &mask_roi, roi, full, background.plain)?;
+        let found = self.cables_in(&work, &mask_roi, roi, full)?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -355,20 +356,19 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, full, full, false)
+        self.cables_in(mask, mask, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
     /// `image_roi`, region `roi` of an image of extent `full`, perhaps
-    /// resized (see [`VisionConfig::work_width_px`]), on a plain background
-    /// or not: what is found is given in the image's pixels.
+    /// resized (see [`VisionConfig::work_width_px`]): what is found is given
+    /// in the image's pixels.
     fn cables_in(
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
         roi: Rect,
         full: Rect,
-        plain_background: bool,
     ) -> Result<MaskInstances, VisionError> {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
@@ -408,6 +408,7 @@ impl Pipeline {
         let to_image = ToImage::new(roi, size_px);
         let mut fitted = Vec::new();
         let mut straight_dropped = 0;
+        let mut plain_around = None;
         for path in paths {
             let n = spline::control_points_for_length(path.length_px);
             let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
@@ -418,9 +419,13 @@ impl Pipeline {
                 &samples_px,
                 path.length_px,
                 self.config.straight_edge_radius_px,
-            ) && !(plain_background
-                && sides_alike(image_roi, mask_roi, &samples_px, found.width_px)?)
-            {
+            ) && !straight_cable(
+                image_roi,
+                mask_roi,
+                &samples_px,
+                found.width_px,
+                &mut plain_around,
+            )? {
                 straight_dropped += 1;
                 continue;
             }
@@ -611,31 +616,50 @@ fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bo
             || spline::arc_radius_px(length_px, sagitta_px) > radius_px)
 }
 
-/// On a plain background, a straight detection is a cable, not an edge,
-/// when the background's colours either side of it differ by less than
-/// this share of the smaller difference between the detection and either
-/// side. An edge's sides differ: the paper and table edges taken for
+/// On a background plain around each pixel, a straight detection is a
+/// cable, not an edge, when the background's colours either side of it
+/// differ by less than this share of the smaller difference between the
+/// detection and either side. An edge's sides differ: the paper and table edges taken for
 /// cables in cables-dev's photographs (on busy backgrounds) score 1.0 and
-/// 1.25. A cable's do not: the rendered straight cables kept on plain
-/// backgrounds are the same at any share from 0.3 to 1.5.
+/// 1.25. A cable's do not: of the rendered straight detections kept,
+/// about as many at any share from 0.3 to 1.5 (docs/vision.md, "Straight
+/// cables on a plain table").
 const EDGE_SIDES_RATIO: f64 = 0.5;
 /// Where each side's background is read, in cable widths from the
 /// detection's centre line: clear of the cable and its shading.
 const SIDE_OFFSETS_WIDTHS: [f64; 2] = [1.0, 1.5];
 
+/// Whether a straight detection (points along it, cables `width_px`
+/// wide) is a cable, not an edge: the BGR `image`'s background is plain
+/// around each pixel ([`mask::plain_locally`], which `plain_around`
+/// keeps for the image once it is first needed) and alike on the
+/// detection's two sides. Not when the image's colour is unknown.
+fn straight_cable(
+    image: &Mat,
+    mask: &Mat,
+    points_px: &[[f64; 2]],
+    width_px: f64,
+    plain_around: &mut Option<bool>,
+) -> Result<bool, VisionError> {
+    if image.channels() != 3 {
+        return Ok(false);
+    }
+    let plain = match *plain_around {
+        Some(plain) => plain,
+        None => *plain_around.insert(mask::plain_locally(image)?),
+    };
+    Ok(plain && sides_alike(image, mask, points_px, width_px)?)
+}
+
 /// Whether the BGR `image`'s background, off `mask`, is alike on the two
 /// sides of a detection (points along it, cables `width_px` wide; see
-/// [`EDGE_SIDES_RATIO`]). Not when a side or the image's colour is
-/// unknown.
+/// [`EDGE_SIDES_RATIO`]). Not when a side is unknown.
 fn sides_alike(
     image: &Mat,
     mask: &Mat,
     points_px: &[[f64; 2]],
     width_px: f64,
 ) -> Result<bool, VisionError> {
-    if image.channels() != 3 {
-        return Ok(false);
-    }
     let in_image = |p: &[f64; 2]| {
         (0.0..f64::from(image.cols())).contains(&p[0].round())
             && (0.0..f64::from(image.rows())).contains(&p[1].round())
@@ -1552,8 +1576,8 @@ mod tests {
 
         // Drawn as a cable on an even table, the straight line is a taut
         // cable: the table is alike on its two sides.
-        let scene = on_gray_table(lines.iter().map(|c| cable(c.clone(), [20; 3])).collect());
-        let out = detect(&scene.bgr, VisionConfig::default());
+        let drawn = on_gray_table(lines.iter().map(|c| cable(c.clone(), [20; 3])).collect());
+        let out = detect(&drawn.bgr, VisionConfig::default());
         assert!(out.plain_background, "{:?}", out.background);
         assert_each_followed(&out, &lines, 2.5);
         assert!(out.notes.is_empty(), "{:?}", out.notes);
@@ -1574,25 +1598,49 @@ mod tests {
         let mut known = scene.union_mask.clone();
         let band = draw_paths(480, 640, &[&lines[0]], 8).unwrap();
         core::bitwise_or_def(&scene.union_mask, &band, &mut known).unwrap();
-        let by_network = |config: VisionConfig| {
+        let by_network = |image: &Mat, config: VisionConfig| {
             let mut net = KnownMask(known.clone());
             let config = VisionConfig {
                 mask: MaskMethod::Network,
                 ..config
             };
-            Pipeline::new(config)
-                .detect(&sheet_edge, Some(&mut net))
-                .unwrap()
+            Pipeline::new(config).detect(image, Some(&mut net)).unwrap()
         };
-        let out = by_network(VisionConfig::default());
+        let dropped =
+            |out: &VisionOutput| out.notes.iter().any(|n| n.contains("1 straight detection"));
+        let out = by_network(&sheet_edge, VisionConfig::default());
         assert!(out.plain_background, "{:?}", out.background);
         assert_each_followed(&out, &lines[1..], 2.5);
-        assert!(
-            out.notes.iter().any(|n| n.contains("1 straight detection")),
-            "{:?}",
-            out.notes
-        );
-        assert_each_followed(&by_network(keep_straight()), &lines, 2.5);
+        assert!(dropped(&out), "{:?}", out.notes);
+        assert_each_followed(&by_network(&sheet_edge, keep_straight()), &lines, 2.5);
+
+        // Under a light that falls off to the corners the table is no
+        // longer plain as a whole, but it is around each pixel: the cable
+        // is kept and the sheet's edge dropped as before.
+        let out = by_network(&falling_off(&drawn.bgr), VisionConfig::default());
+        assert!(!out.plain_background, "{:?}", out.background);
+        assert_each_followed(&out, &lines, 2.5);
+        assert!(!dropped(&out), "{:?}", out.notes);
+        let out = by_network(&falling_off(&sheet_edge), VisionConfig::default());
+        assert_each_followed(&out, &lines[1..], 2.5);
+        assert!(dropped(&out), "{:?}", out.notes);
+    }
+
+    /// `image` under a light that falls off from its middle: the corners
+    /// at half the brightness.
+    fn falling_off(image: &Mat) -> Mat {
+        let mut lit = image.clone();
+        let (rows, cols) = (lit.rows(), lit.cols());
+        for y in 0..rows {
+            for x in 0..cols {
+                let r = (f64::from(x) / f64::from(cols) - 0.5)
+                    .hypot(f64::from(y) / f64::from(rows) - 0.5);
+                let gain = 1.0 - r * r;
+                let px = lit.at_2d_mut::<core::Vec3b>(y, x).unwrap();
+                *px = core::Vec3b::from(px.0.map(|v| (f64::from(v) * gain) as u8));
+            }
+        }
+        lit
     }
 
     #[test]
