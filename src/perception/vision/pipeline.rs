@@ -619,11 +619,11 @@ fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bo
 /// On a background plain around each pixel, a straight detection is a
 /// cable, not an edge, when the background's colours either side of it
 /// differ by less than this share of the smaller difference between the
-/// detection and either side. An edge's sides differ: the paper and table edges taken for
-/// cables in cables-dev's photographs (on busy backgrounds) score 1.0 and
-/// 1.25. A cable's do not: of the rendered straight detections kept,
-/// about as many at any share from 0.3 to 1.5 (docs/vision.md, "Straight
-/// cables on a plain table").
+/// detection and either side. An edge's sides differ: the paper and table
+/// edges taken for cables in cables-dev's photographs (on busy
+/// backgrounds) score 1.0 and 1.25. A cable's do not: about as many
+/// rendered straight detections are kept at any share from 0.3 to 1.5
+/// (docs/vision.md, "Straight cables on a plain table").
 const EDGE_SIDES_RATIO: f64 = 0.5;
 /// Where each side's background is read, in cable widths from the
 /// detection's centre line: clear of the cable and its shading.
