@@ -613,23 +613,30 @@ mod tests {
         assert!(classical_doubt(&mask, &stats).unwrap().is_some());
     }
 
-    #[test]
-    fn a_lights_falloff_over_a_plain_table_is_not_taken_for_cables() {
-        // A dark table lit from its middle: 100 there, 65 in the corners,
-        // plain all the same; a dull blue cable across it, as far from
-        // the table's colour as the corners are.
-        let (rows, cols) = (240, 320);
+    /// A `rows` × `cols` gray table lit from its middle: `gray(r2)` at a
+    /// squared distance `r2` from the middle, in the image's widths and
+    /// heights (0 in the middle, 0.5 in the corners).
+    fn lit_table(rows: i32, cols: i32, gray: impl Fn(f64) -> f64) -> Mat {
         let mut img =
             Mat::new_rows_cols_with_default(rows, cols, core::CV_8UC3, Scalar::all(0.0)).unwrap();
         for y in 0..rows {
             for x in 0..cols {
                 let r = (f64::from(x) / f64::from(cols) - 0.5)
                     .hypot(f64::from(y) / f64::from(rows) - 0.5);
-                // r² / 0.5: 0 in the middle, 1 in the corners.
-                let gray = (100.0 - 35.0 * r * r / 0.5) as u8;
-                *img.at_2d_mut::<core::Vec3b>(y, x).unwrap() = core::Vec3b::from([gray; 3]);
+                *img.at_2d_mut::<core::Vec3b>(y, x).unwrap() =
+                    core::Vec3b::from([gray(r * r) as u8; 3]);
             }
         }
+        img
+    }
+
+    #[test]
+    fn a_lights_falloff_over_a_plain_table_is_not_taken_for_cables() {
+        // A dark table lit from its middle: 100 there, 65 in the corners,
+        // plain all the same; a dull blue cable across it, as far from
+        // the table's colour as the corners are.
+        let (rows, cols) = (240, 320);
+        let mut img = lit_table(rows, cols, |r2| 100.0 - 35.0 * r2 / 0.5);
         imgproc::line(
             &mut img,
             Point::new(20, 120),
@@ -689,17 +696,7 @@ mod tests {
     #[test]
     fn a_steep_falloff_is_plain_around_each_pixel_not_as_a_whole() {
         // A table of 200 in the middle and half that in the corners.
-        let (rows, cols) = (240, 320);
-        let mut img =
-            Mat::new_rows_cols_with_default(rows, cols, core::CV_8UC3, Scalar::all(0.0)).unwrap();
-        for y in 0..rows {
-            for x in 0..cols {
-                let r = (f64::from(x) / f64::from(cols) - 0.5)
-                    .hypot(f64::from(y) / f64::from(rows) - 0.5);
-                let gray = (200.0 * (1.0 - r * r)) as u8;
-                *img.at_2d_mut::<core::Vec3b>(y, x).unwrap() = core::Vec3b::from([gray; 3]);
-            }
-        }
+        let img = lit_table(240, 320, |r2| 200.0 * (1.0 - r2));
         let stats = background_stats(&img).unwrap();
         assert!(!stats.plain, "{stats:?}");
         assert!(plain_locally(&img).unwrap());
