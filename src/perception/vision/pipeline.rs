@@ -630,10 +630,11 @@ const EDGE_SIDES_RATIO: f64 = 0.5;
 const SIDE_OFFSETS_WIDTHS: [f64; 2] = [1.0, 1.5];
 
 /// Whether a straight detection (points along it, cables `width_px`
-/// wide) is a cable, not an edge: the BGR `image`'s background is plain
-/// around each pixel ([`mask::plain_locally`], which `plain_around`
-/// keeps for the image once it is first needed) and alike on the
-/// detection's two sides. Not when the image's colour is unknown.
+/// wide) is a cable, not an edge: the BGR `image`'s background is alike
+/// on the detection's two sides and plain around each pixel
+/// ([`mask::plain_locally`], the dearer test, asked second and kept in
+/// `plain_around` for the image once asked). Not when the image's colour
+/// is unknown.
 fn straight_cable(
     image: &Mat,
     mask: &Mat,
@@ -644,11 +645,13 @@ fn straight_cable(
     if image.channels() != 3 {
         return Ok(false);
     }
-    let plain = match *plain_around {
-        Some(plain) => plain,
-        None => *plain_around.insert(mask::plain_locally(image)?),
-    };
-    Ok(plain && sides_alike(image, mask, points_px, width_px)?)
+    if !sides_alike(image, mask, points_px, width_px)? {
+        return Ok(false);
+    }
+    match *plain_around {
+        Some(plain) => Ok(plain),
+        None => Ok(*plain_around.insert(mask::plain_locally(image)?)),
+    }
 }
 
 /// Whether the BGR `image`'s background, off `mask`, is alike on the two
