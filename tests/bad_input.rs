@@ -211,3 +211,46 @@ fn a_negative_straight_edge_radius_is_refused_at_its_line() {
         "expected a number ≥ 0, found -1",
     );
 }
+
+#[test]
+fn a_region_of_interest_outside_the_camera_image_is_refused_at_its_line() {
+    for roi in [
+        "[400, 270, 360, 110]",
+        "[140, 270, 0, 110]",
+        "[-1, 270, 360, 110]",
+    ] {
+        assert_cell_refused_at_its_line(
+            "roi_px = [140, 270, 360, 110]",
+            &format!("roi_px = {roi}"),
+            "must have an area and lie within the camera's 640x480 px image",
+        );
+    }
+}
+
+#[test]
+fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
+    let (err, path, _dir) = check_cell_error("cable_segmentation.onnx", "no-such-model.onnx");
+    let line = line_of(&path, "no-such-model.onnx");
+    assert!(
+        err.contains(&format!(
+            "{}:{line}:1: detector.backend.vision.model: segmentation model",
+            path.display()
+        )) && err.contains("no-such-model.onnx is missing or unreadable"),
+        "{err}"
+    );
+    let run = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--cell",
+        path.to_str().expect("utf-8 path"),
+        "--seed",
+        "1",
+    ]);
+    assert_eq!(run.status.code(), Some(BAD_INPUT));
+    assert_eq!(String::from_utf8_lossy(&run.stderr), err);
+    assert!(
+        run.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&run.stdout)
+    );
+}

@@ -2,6 +2,8 @@
 //! seed whatever the thread count, resumable after a kill without losing
 //! or repeating a trial, and clear about bad input.
 
+mod common;
+
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -279,13 +281,17 @@ fn a_bad_campaign_file_says_what_and_where() {
 fn a_trial_that_faults_is_recorded_and_the_campaign_goes_on() {
     let dir = tempfile::tempdir().expect("tempdir");
     // A cell whose tactile sensor falls silent during the first evaluation.
-    let cell = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell");
-    let cell = cell.replace(
-        "noise_fraction = 0.02",
-        "noise_fraction = 0.02\nsilent_after_frames = 55",
+    let cell = common::sim_cell_copy(dir.path(), |cell| {
+        cell.replace(
+            "noise_fraction = 0.02",
+            "noise_fraction = 0.02\nsilent_after_frames = 55",
+        )
+    });
+    assert!(
+        std::fs::read_to_string(cell)
+            .expect("cell")
+            .contains("silent_after_frames = 55")
     );
-    assert!(cell.contains("silent_after_frames = 55"));
-    std::fs::write(dir.path().join("cell.toml"), cell).expect("write cell");
     let campaign = edited_campaign(dir.path(), "\"../config/cell.sim.toml\"", "\"cell.toml\"");
     let out = dir.path().join("out");
     let status = command(&[

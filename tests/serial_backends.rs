@@ -2,6 +2,8 @@
 //! port's path (here the path of an emulator's pseudo-terminal), refusals
 //! of bad tables with file, line and field, and a port that is not there.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Arc;
@@ -65,7 +67,7 @@ fn frame(n: u16) -> RawFrame {
 
 /// `config/cell.sim.toml` with its gripper and tactile tables replaced.
 fn cell_text(gripper: &str, tactile: &str) -> String {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell");
+    let text = common::sim_cell_text();
     let gripper_at = text.find("[gripper.backend.sim]").expect("gripper table");
     let tactile_table = text.find("[tactile.backend.sim]").expect("tactile table");
     let camera_at = text.find("[camera]").expect("camera table");

@@ -166,15 +166,29 @@ fn calibration_without_the_marker_in_view_fails_clearly() {
 }
 
 #[test]
-fn a_missing_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
+fn a_corrupt_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
+    // A missing model is refused with the cell file (tests/bad_input.rs);
+    // one that is there but is no network shows only when it is loaded.
     let dir = tempfile::tempdir().expect("tempdir");
+    let broken = dir.path().join("broken.onnx");
+    std::fs::write(&broken, "not a network").expect("write");
     let path = common::sim_cell_copy(dir.path(), |text| {
-        text.replace("cable_segmentation.onnx", "no-such-model.onnx")
+        let model = format!("model = \"{}\"", broken.display());
+        text.lines()
+            .map(|line| {
+                if line.starts_with("model = ") {
+                    model.as_str()
+                } else {
+                    line
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
     });
     let report = common::regrasp_fault_report(&path);
     assert_eq!(report["outcome"]["state"], "detect");
     let reason = report["outcome"].to_string();
-    assert!(reason.contains("no-such-model.onnx"), "{reason}");
+    assert!(reason.contains("broken.onnx"), "{reason}");
 }
 
 fn gray_image(width: i32, height: i32) -> Mat {

@@ -6,6 +6,7 @@ use serde::de::DeserializeOwned;
 
 use super::cell_file::DetectorBackend;
 use super::{CampaignFile, CellFile, TaskFile};
+use crate::perception::vision::MaskMethod;
 
 /// Why a task or cell file could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -60,9 +61,7 @@ pub fn load_task(path: &Path) -> Result<TaskFile, ConfigError> {
 /// Loads a cell file: its schema, the checks that span several tables,
 /// and its paths made relative to the file's folder.
 pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
-    let mut cell = parse_cell(path, &read(path)?)?;
-    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
-    Ok(cell)
+    parse_cell(path, &read(path)?)
 }
 
 /// Loads a cell file that may still lack its camera's calibration, for
@@ -73,23 +72,72 @@ pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
     Ok(cell)
 }
 
+/// A cell file's schema, its paths made relative to its folder, and the
+/// checks that span several tables. The vision detector's are made here,
+/// before the cell moves, rather than when it first looks at the camera.
 fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
-    let cell: CellFile = parse(path, text)?;
-    if matches!(cell.detector.backend, DetectorBackend::Vision(_))
-        && cell.camera.calibration.is_none()
-    {
-        let (line, column) = key_position(text, &["detector", "backend", "vision"]);
-        return Err(ConfigError::Invalid {
+    let mut cell: CellFile = parse(path, text)?;
+    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
+    let DetectorBackend::Vision(vision) = &cell.detector.backend else {
+        return Ok(cell);
+    };
+    let refuse = |keys: &[&str], field: &str, message: String| {
+        let (line, column) = key_position(text, keys);
+        Err(ConfigError::Invalid {
             path: path.to_owned(),
             line,
             column,
-            field: "camera.calibration".to_owned(),
-            message: format!(
+            field: field.to_owned(),
+            message,
+        })
+    };
+    if cell.camera.calibration.is_none() {
+        return refuse(
+            &["detector", "backend", "vision"],
+            "camera.calibration",
+            format!(
                 "the vision detector needs the camera's pose in the base frame: \
                  run `cablecell calibrate-camera --cell {}`",
                 path.display()
             ),
-        });
+        );
+    }
+    if let Some([x, y, width, height]) = vision.roi_px {
+        let image = &cell.camera.intrinsics;
+        let inside = width > 0
+            && height > 0
+            && x >= 0
+            && y >= 0
+            && x + width <= image.width_px
+            && y + height <= image.height_px;
+        if !inside {
+            return refuse(
+                &["detector", "backend", "vision", "roi_px"],
+                "detector.backend.vision.roi_px",
+                format!(
+                    "the region of interest x={x} y={y} {width}x{height} px must have an area \
+                     and lie within the camera's {}x{} px image (camera.intrinsics)",
+                    image.width_px, image.height_px
+                ),
+            );
+        }
+    }
+    if vision.mask != MaskMethod::Classical {
+        let unreadable = match std::fs::metadata(&vision.model) {
+            Ok(meta) if meta.is_file() => None,
+            Ok(_) => Some("not a file".to_owned()),
+            Err(error) => Some(error.to_string()),
+        };
+        if let Some(reason) = unreadable {
+            return refuse(
+                &["detector", "backend", "vision", "model"],
+                "detector.backend.vision.model",
+                format!(
+                    "segmentation model {} is missing or unreadable: {reason}",
+                    vision.model.display()
+                ),
+            );
+        }
     }
     Ok(cell)
 }

@@ -41,12 +41,18 @@ pub fn text(path: &Path) -> &str {
     path.to_str().expect("utf-8 path")
 }
 
+/// The shipped simulated cell's text, its model path made absolute so that
+/// a copy elsewhere finds the model.
+pub fn sim_cell_text() -> String {
+    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    let models = root().join("models");
+    text.replace("../models", models.to_str().expect("utf-8"))
+}
+
 /// The shipped simulated cell's text after `edit`, written into `dir`, its
 /// model path made absolute so that the copy finds the model.
 pub fn sim_cell_copy(dir: &Path, edit: impl Fn(String) -> String) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
-    let models = root().join("models");
-    let text = edit(text.replace("../models", models.to_str().expect("utf-8")));
+    let text = edit(sim_cell_text());
     let path = dir.join("cell.toml");
     std::fs::write(&path, text).expect("write");
     path
