@@ -218,6 +218,7 @@ fn a_region_of_interest_outside_the_camera_image_is_refused_at_its_line() {
         "[400, 270, 360, 110]",
         "[140, 270, 0, 110]",
         "[-1, 270, 360, 110]",
+        "[2147483647, 270, 360, 110]",
     ] {
         assert_cell_refused_at_its_line(
             "roi_px = [140, 270, 360, 110]",

@@ -108,8 +108,8 @@ fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
             && height > 0
             && x >= 0
             && y >= 0
-            && x + width <= image.width_px
-            && y + height <= image.height_px;
+            && i64::from(x) + i64::from(width) <= i64::from(image.width_px)
+            && i64::from(y) + i64::from(height) <= i64::from(image.height_px);
         if !inside {
             return refuse(
                 &["detector", "backend", "vision", "roi_px"],
