@@ -5,24 +5,15 @@
 //! address of its own (the protocol's port is fixed). Without the `panda`
 //! feature, a cell file asking for the Panda is refused with how to build.
 
-use std::path::Path;
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
 
 /// The simulated cell with its arm swapped for `arm_backend`, in a temp file.
 fn cell_with_arm(dir: &tempfile::TempDir, arm_backend: &str) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
-    let start = text.find("[arm.backend.sim]").expect("sim arm table");
-    let end = start + text[start..].find("\n\n").expect("end of the table");
-    let path = dir.path().join("cell.toml");
-    std::fs::write(
-        &path,
-        format!("{}{arm_backend}{}", &text[..start], &text[end..]),
-    )
-    .expect("write");
-    path
+    common::sim_cell_copy(dir.path(), |text| {
+        let start = text.find("[arm.backend.sim]").expect("sim arm table");
+        let end = start + text[start..].find("\n\n").expect("end of the table");
+        format!("{}{arm_backend}{}", &text[..start], &text[end..])
+    })
 }
 
 const PANDA_BACKEND: &str = r#"[arm.backend.panda]
