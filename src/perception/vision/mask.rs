@@ -238,12 +238,7 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
     let lab = plain_test_lab(bgr)?;
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
     let background_lab = median3(bytes);
-    let n = bytes.len() / 3;
-    let near = bytes
-        .chunks_exact(3)
-        .filter(|px| lab_distance(px, background_lab) <= PLAIN_NEAR_LAB)
-        .count();
-    let near_fraction = if n == 0 { 0.0 } else { near as f64 / n as f64 };
+    let near_fraction = share_near(bytes, |_| background_lab);
     Ok(BackgroundStats {
         background_lab,
         near_fraction,
@@ -266,13 +261,27 @@ pub fn plain_locally(bgr: &Mat) -> Result<bool, VisionError> {
     let local = local_background_lab(bgr, lab.size().map_err(cv("image size"))?)?;
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
     let local_bytes = local.data_bytes().map_err(cv("read Lab pixels"))?;
+    let near_fraction = share_near(bytes, |i| {
+        [
+            local_bytes[3 * i],
+            local_bytes[3 * i + 1],
+            local_bytes[3 * i + 2],
+        ]
+        .map(f64::from)
+    });
+    Ok(near_fraction >= PLAIN_MIN_FRACTION)
+}
+
+/// The share of the Lab pixels in `bytes` within [`PLAIN_NEAR_LAB`] of
+/// their background, `background(i)` for pixel `i`; 0 for no pixels.
+fn share_near(bytes: &[u8], background: impl Fn(usize) -> [f64; 3]) -> f64 {
     let n = bytes.len() / 3;
     let near = bytes
         .chunks_exact(3)
-        .zip(local_bytes.chunks_exact(3))
-        .filter(|(px, bg)| lab_distance(px, [bg[0], bg[1], bg[2]].map(f64::from)) <= PLAIN_NEAR_LAB)
+        .enumerate()
+        .filter(|(i, px)| lab_distance(px, background(*i)) <= PLAIN_NEAR_LAB)
         .count();
-    Ok(n > 0 && near as f64 / n as f64 >= PLAIN_MIN_FRACTION)
+    if n == 0 { 0.0 } else { near as f64 / n as f64 }
 }
 
 /// The background's colour at every pixel, in an image of `size` (8-bit
