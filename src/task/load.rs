@@ -67,7 +67,12 @@ pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
 /// Loads a cell file that may still lack its camera's calibration, for
 /// the command that makes it.
 pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
-    let mut cell: CellFile = parse(path, &read(path)?)?;
+    parse_resolved(path, &read(path)?)
+}
+
+/// A cell file's schema, its paths made relative to its folder.
+fn parse_resolved(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
+    let mut cell: CellFile = parse(path, text)?;
     cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
     Ok(cell)
 }
@@ -76,8 +81,7 @@ pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
 /// checks that span several tables. The vision detector's are made here,
 /// before the cell moves, rather than when it first looks at the camera.
 fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
-    let mut cell: CellFile = parse(path, text)?;
-    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
+    let cell = parse_resolved(path, text)?;
     let DetectorBackend::Vision(vision) = &cell.detector.backend else {
         return Ok(cell);
     };
