@@ -21,10 +21,10 @@ use std::time::Duration;
 
 use cablecell::geometry::LineInSensor;
 use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::hw::tactile::{PolledTactile, RemodelTactile, SerialLink, TactileSensor};
 use cablecell::perception::tactile::{BiasEstimator, FitConfig, fit_wire};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
-use cablecell::sim::emulator::tactile::TactileEmulator;
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
 use cablecell::task::load_cell;

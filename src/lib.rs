@@ -3,10 +3,12 @@
 
 pub mod campaign;
 pub mod cell;
+pub mod detector;
 pub mod geometry;
 pub mod hw;
 pub mod orchestrator;
 pub mod perception;
+pub mod record;
 pub mod recording;
 pub mod sim;
 pub mod task;

@@ -55,8 +55,8 @@ mod emulated {
     use cablecell::cell::Cell;
     use cablecell::hw::DeviceError;
     use cablecell::hw::arm::panda::panda_limits;
+    use cablecell::hw::arm::panda_emulator::PandaEmulator;
     use cablecell::hw::arm::{Arm, Panda};
-    use cablecell::sim::emulator::panda::PandaEmulator;
     use cablecell::sim::motion::move_duration_s;
     use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 

@@ -7,9 +7,9 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::hw::DeviceError;
+use cablecell::hw::emulator::Fault;
+use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Misbehaviour, Pg70Emulator};
 use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
-use cablecell::sim::emulator::Fault;
-use cablecell::sim::emulator::pg70::{FreeJaws, Misbehaviour, Pg70Emulator};
 use serialport::{SerialPort, TTYPort};
 
 struct Bench {

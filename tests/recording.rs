@@ -10,8 +10,9 @@ mod common;
 use common::root;
 
 use cablecell::campaign::run::{Campaign, Overrides};
-use cablecell::orchestrator::{RunRecord, Runner};
+use cablecell::orchestrator::Runner;
 use cablecell::perception::tactile::Estimator;
+use cablecell::record::RunRecord;
 use cablecell::recording::replay::Replay;
 use cablecell::recording::{Recording, Topic};
 use cablecell::task::load_task;

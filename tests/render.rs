@@ -5,6 +5,7 @@
 
 use std::path::Path;
 
+use cablecell::cell::file::WorldConfig;
 use cablecell::perception::vision::calibration::{
     CalibrationError, CameraModel, MarkerOnFinger, MarkerView, calibrate, calibrate_views,
 };
@@ -14,7 +15,6 @@ use cablecell::sim::render::{
     render, render_world, write_dataset,
 };
 use cablecell::sim::world::SimWorld;
-use cablecell::task::cell_file::WorldConfig;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
 use opencv::core::{self, Mat, Vec3b};

@@ -7,8 +7,10 @@ mod common;
 
 use common::root;
 
-use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
-use cablecell::task::{CellFile, TaskFile, load_cell, load_task};
+use cablecell::cell::CellFile;
+use cablecell::orchestrator::Runner;
+use cablecell::record::{RunOutcome, RunRecord};
+use cablecell::task::{TaskFile, load_cell, load_task};
 
 fn shipped() -> (TaskFile, CellFile) {
     let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");

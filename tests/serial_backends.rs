@@ -12,11 +12,11 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::cell::Cell;
+use cablecell::cell::file::{GripperBackend, TactileBackend};
+use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
+use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::hw::{DeviceError, DeviceKind};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
-use cablecell::sim::emulator::pg70::{FreeJaws, Pg70Emulator};
-use cablecell::sim::emulator::tactile::TactileEmulator;
-use cablecell::task::cell_file::{GripperBackend, TactileBackend};
 use cablecell::task::load_cell;
 use serialport::{SerialPort, TTYPort};
 

@@ -9,10 +9,10 @@ use std::time::Duration;
 
 use cablecell::hw::DeviceError;
 use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::emulator::Fault;
+use cablecell::hw::tactile::remodel_emulator::{Misbehaviour, TactileEmulator};
 use cablecell::hw::tactile::{RemodelTactile, TactileSensor};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
-use cablecell::sim::emulator::Fault;
-use cablecell::sim::emulator::tactile::{Misbehaviour, TactileEmulator};
 use serialport::{SerialPort, TTYPort};
 
 /// A layout that is not the identity: channel = 24 − taxel.

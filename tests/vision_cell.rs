@@ -6,10 +6,10 @@
 mod common;
 
 use cablecell::cell::Cell;
+use cablecell::cell::file::{CameraBackend, CameraSource};
 use cablecell::hw::DeviceError;
 use cablecell::hw::camera::{Camera, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
-use cablecell::task::cell_file::{CameraBackend, CameraSource};
 use cablecell::task::load_cell;
 use common::{cablecell, json_of, root};
 use nalgebra::Vector3;

@@ -7,13 +7,15 @@ use std::time::Instant;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
+use crate::cell::CellFile;
+use crate::cell::file::{ArmBackend, DetectorBackend, OracleConfig};
 use crate::geometry::{LineInSensor, PoseError};
-use crate::orchestrator::{RunOutcome, Runner};
+use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
+use crate::record::RunOutcome;
 use crate::sim::{Stream, rng};
+use crate::task::TaskFile;
 use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
-use crate::task::cell_file::{ArmBackend, DetectorBackend, OracleConfig};
-use crate::task::{CellFile, TaskFile};
 
 /// The seed of trial `index`: the same for every policy, and independent
 /// of the order and the thread the trials run in.

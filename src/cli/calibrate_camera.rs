@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use cablecell::cell::Cell;
+use cablecell::cell::file::{CameraBackend, FrameConfig};
 use cablecell::perception::vision::calibration::{CameraCalibration, MarkerView, calibrate_views};
-use cablecell::task::cell_file::{CameraBackend, FrameConfig};
 use cablecell::task::load::load_cell_uncalibrated;
 use nalgebra::Isometry3;
 use opencv::core::Mat;

@@ -3,10 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use cablecell::cell::file::{CellFile, DetectorBackend, FrameConfig};
 use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
-use cablecell::task::cell_file::{CellFile, DetectorBackend, FrameConfig};
 use cablecell::task::load::load_cell_uncalibrated;
 use opencv::core::Mat;
 use serde::Serialize;

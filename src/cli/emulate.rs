@@ -7,8 +7,8 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use cablecell::geometry::LineInSensor;
-use cablecell::sim::emulator::pg70::{FreeJaws, Pg70Emulator};
-use cablecell::sim::emulator::tactile::TactileEmulator;
+use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
+use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
 use cablecell::task::load_cell;

@@ -3,8 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use cablecell::orchestrator::record::{GraspRecord, RunReport, TransitionRecord};
-use cablecell::orchestrator::{RunOutcome, RunRecord, Runner};
+use cablecell::orchestrator::Runner;
+use cablecell::record::{GraspRecord, RunReport, TransitionRecord};
+use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::task::{load_cell, load_task};
 
 use super::Status;

@@ -5,7 +5,7 @@
 pub mod arm;
 pub mod camera;
 pub mod clock;
-pub mod detector;
+pub mod emulator;
 pub mod gripper;
 pub mod tactile;
 

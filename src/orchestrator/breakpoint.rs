@@ -8,7 +8,7 @@
 //! and not a breakpoint that silently never fires.
 
 use super::machine::State;
-use super::record::RunRecord;
+use crate::record::RunRecord;
 
 /// Why a condition could not be parsed; `column` counts characters from 1.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

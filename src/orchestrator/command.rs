@@ -2,9 +2,9 @@
 
 use nalgebra::Isometry3;
 
+use crate::detector::Detections;
 use crate::geometry::LineInSensor;
 use crate::hw::DeviceError;
-use crate::hw::detector::Detections;
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
 

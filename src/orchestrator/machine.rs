@@ -20,11 +20,11 @@ use statig::prelude::*;
 
 use super::command::{Command, Event};
 use super::plan::Plan;
-use super::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
 use crate::geometry::{LineInSensor, planar_to_spatial, t_corr_with_gain};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
+use crate::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
 
 /// What the machine shares with the runner.
 #[derive(Debug)]
@@ -450,13 +450,13 @@ mod tests {
     use nalgebra::{Isometry2, Translation3, UnitQuaternion, Vector2, Vector3};
 
     use super::*;
+    use crate::cell::file::SimTactileConfig;
+    use crate::detector::{CableDetection, Detections};
     use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
-    use crate::hw::detector::{CableDetection, Detections};
     use crate::hw::{DeviceError, DeviceKind};
     use crate::perception::tactile::{Estimator, FitConfig};
     use crate::sim::tactile_model::TactileModel;
     use crate::sim::{Stream, rng};
-    use crate::task::cell_file::SimTactileConfig;
 
     fn plan(max_regrasps: u32, estimator: Estimator) -> Plan {
         Plan {

@@ -14,7 +14,6 @@ pub mod graph;
 pub mod machine;
 pub mod params;
 pub mod plan;
-pub mod record;
 pub mod runner;
 #[cfg(test)]
 mod test_cell;
@@ -22,5 +21,4 @@ mod test_cell;
 pub use command::{Command, Event};
 pub use machine::{Context, GraspTask, State};
 pub use plan::Plan;
-pub use record::{RunOutcome, RunRecord};
 pub use runner::Runner;

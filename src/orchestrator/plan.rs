@@ -2,9 +2,10 @@
 
 use nalgebra::Isometry3;
 
+use crate::cell::CellFile;
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::{Estimator, FitConfig};
-use crate::task::{CellFile, TaskFile};
+use crate::task::TaskFile;
 
 #[derive(Debug, Clone)]
 pub struct Plan {

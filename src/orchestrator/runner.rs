@@ -13,13 +13,14 @@ use super::command::{Command, Event};
 use super::executor::execute;
 use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
-use super::record::RunRecord;
 use crate::cell::Cell;
+use crate::cell::CellFile;
+use crate::detector::Detections;
 use crate::hw::DeviceError;
-use crate::hw::detector::Detections;
+use crate::record::RunRecord;
 use crate::recording::schema::{RunMessage, Timestamp};
 use crate::recording::{Recorder, RecordingError, Topic};
-use crate::task::{CellFile, TaskFile};
+use crate::task::TaskFile;
 
 pub struct Runner {
     machine: InitializedStateMachine<GraspTask>,

@@ -3,8 +3,9 @@
 //! that trial grasps land a few millimetres off, as in the paper, and
 //! regrasps happen (the vision detector rarely leaves one to do).
 
-use crate::task::cell_file::{DetectorBackend, OracleConfig};
-use crate::task::{CellFile, load_cell};
+use crate::cell::CellFile;
+use crate::cell::file::{DetectorBackend, OracleConfig};
+use crate::task::load_cell;
 
 pub fn sim_cell_with_oracle() -> CellFile {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

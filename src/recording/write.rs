@@ -18,8 +18,8 @@ use super::schema::{
 };
 use crate::hw::camera::CameraImage;
 use crate::hw::tactile::TactileFrame;
-use crate::orchestrator::record::{GraspRecord, RunOutcome, RunRecord, TransitionRecord};
 use crate::perception::tactile::{Bias, BiasEstimator, Estimate, Estimator, TactileMap};
+use crate::record::{GraspRecord, RunOutcome, RunRecord, TransitionRecord};
 
 /// An MCAP file being written. Messages go straight to the file, not into
 /// chunks, so that whatever was flushed stays readable if the program is

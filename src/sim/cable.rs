@@ -14,8 +14,8 @@
 //!
 //! See docs/simulated-cell.md for the model and the reasons for its values.
 
+use crate::cell::file::WorldConfig;
 use crate::geometry::LineInSensor;
-use crate::task::cell_file::WorldConfig;
 
 /// Half the width of the jaws' pads, the lever of a turn of the cable
 /// between them: the cap's half side, 2.5 pitches of 3.55 mm.

@@ -5,7 +5,6 @@
 //! parameters: docs/simulated-cell.md.
 
 pub mod cable;
-pub mod emulator;
 pub mod motion;
 pub mod render;
 pub mod tactile_model;

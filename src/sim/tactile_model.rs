@@ -29,9 +29,9 @@ use nalgebra::Vector2;
 use rand::{Rng, RngExt};
 use rand_distr::StandardNormal;
 
+use crate::cell::file::SimTactileConfig;
 use crate::geometry::LineInSensor;
 use crate::perception::tactile::{ADC_MAX, RawFrame, TAXEL_COLS, TAXEL_COUNT};
-use crate::task::cell_file::SimTactileConfig;
 
 /// ADC full scale of the sensor's microcontroller.
 const ADC_FULL_SCALE_V: f64 = 3.3;

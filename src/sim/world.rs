@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
 
 use super::cable::CableModel;
+use crate::cell::file::WorldConfig;
 use crate::geometry::{LineInSensor, planar_to_spatial};
-use crate::task::cell_file::WorldConfig;
 
 /// The world as the simulated devices share it.
 pub type SharedWorld = Arc<Mutex<SimWorld>>;

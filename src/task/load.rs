@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::cell_file::DetectorBackend;
-use super::{CampaignFile, CellFile, TaskFile};
+use super::{CampaignFile, TaskFile};
+use crate::cell::CellFile;
+use crate::cell::file::DetectorBackend;
 use crate::perception::vision::MaskMethod;
 
 /// Why a task or cell file could not be used.

@@ -8,12 +8,10 @@
 //! `cablecell check` can tell them apart.
 
 pub mod campaign_file;
-pub mod cell_file;
 pub mod load;
 pub mod task_file;
 pub(crate) mod validate;
 
 pub use campaign_file::CampaignFile;
-pub use cell_file::CellFile;
 pub use load::{ConfigError, FileKind, check_file, load_cell, load_task};
 pub use task_file::TaskFile;

@@ -8,8 +8,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use cablecell::task::cell_file::{DetectorBackend, OracleConfig};
-use cablecell::task::{CellFile, load_cell};
+use cablecell::cell::CellFile;
+use cablecell::cell::file::{DetectorBackend, OracleConfig};
+use cablecell::task::load_cell;
 
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

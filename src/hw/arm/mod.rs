@@ -3,6 +3,8 @@
 
 #[cfg(feature = "panda")]
 pub mod panda;
+#[cfg(feature = "panda")]
+pub mod panda_emulator;
 mod sim;
 mod workspace_limited;
 

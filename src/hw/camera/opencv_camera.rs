@@ -10,9 +10,9 @@ use opencv::prelude::*;
 use opencv::videoio::{self, VideoCapture};
 
 use super::{Camera, read_image};
+use crate::cell::file::CameraSource;
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::vision::calibration::CameraModel;
-use crate::task::cell_file::CameraSource;
 
 pub struct OpencvCamera {
     source: CameraSource,

@@ -2,6 +2,7 @@
 //! the Schunk PG70 takes them.
 
 mod pg70;
+pub mod pg70_emulator;
 mod sim;
 pub mod smp;
 

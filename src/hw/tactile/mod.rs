@@ -3,6 +3,7 @@
 
 mod polled;
 mod remodel;
+pub mod remodel_emulator;
 mod sim;
 
 pub use polled::PolledTactile;

@@ -2,11 +2,6 @@
 //! protocols on a byte stream (a pseudo-terminal in the tests), and can
 //! misbehave on purpose, so that the real drivers are tested end to end.
 
-#[cfg(feature = "panda")]
-pub mod panda;
-pub mod pg70;
-pub mod tactile;
-
 use std::sync::{Arc, Mutex, PoisonError};
 
 use serde::Deserialize;

@@ -10,19 +10,21 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
 use crate::hw::arm::WorkspaceBox;
+use crate::hw::emulator::Fault;
+use crate::hw::gripper::pg70_emulator as pg70;
+use crate::hw::tactile::remodel_emulator as tactile;
 use crate::perception::tactile::TAXEL_COUNT;
 use crate::perception::vision::network::{
     DEFAULT_INPUT_SCALE, MAX_INPUT_SCALE, input_scale_is_valid,
 };
-use crate::sim::emulator::{Fault, pg70, tactile};
 
-use super::validate::{
-    camera_model, finite, fraction, non_negative, positive, unit_vector3, vector3, voltage_range,
-};
 use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
 use crate::perception::vision::grasp_frame::{ImageToBase, PlaneInBase};
 use crate::perception::vision::{InstanceMethod, MaskMethod, VisionConfig};
 use crate::sim::render::{Appearance, Background};
+use crate::task::validate::{
+    camera_model, finite, fraction, non_negative, positive, unit_vector3, vector3, voltage_range,
+};
 
 /// A cell file, e.g. `config/cell.sim.toml`.
 #[derive(Debug, Clone, Deserialize)]

@@ -14,29 +14,29 @@ use std::time::Duration;
 
 use serialport::{SerialPort, TTYPort};
 
+use crate::cell::CellFile;
+use crate::cell::file::{
+    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, SimGripperConfig, SimTactileConfig,
+    TactileBackend,
+};
+use crate::detector::{CableDetector, OracleDetector, VisionDetector};
 use crate::geometry::LineInSensor;
 use crate::hw::arm::{Arm, SimArm, WorkspaceLimited};
 use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
 use crate::hw::clock::{Clock, MonotonicClock, SimClock};
-use crate::hw::detector::{CableDetector, OracleDetector, VisionDetector};
+use crate::hw::emulator::FaultSwitch;
+use crate::hw::gripper::pg70_emulator::{self, Pg70Emulator};
 use crate::hw::gripper::{Gripper, Pg70, SimGripper};
+use crate::hw::tactile::remodel_emulator::{self, TactileEmulator};
 use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSensor};
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::TAXEL_COUNT;
 use crate::perception::vision::Pipeline;
 use crate::perception::vision::network::{DEFAULT_THRESHOLD, LazyNetwork, runtime_library};
-use crate::sim::emulator::FaultSwitch;
-use crate::sim::emulator::pg70::{self, Pg70Emulator};
-use crate::sim::emulator::tactile::{self, TactileEmulator};
 use crate::sim::motion::CartesianLimits;
 use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};
-use crate::task::CellFile;
-use crate::task::cell_file::{
-    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, SimGripperConfig, SimTactileConfig,
-    TactileBackend,
-};
 
 pub struct Cell {
     pub name: String,
@@ -58,9 +58,9 @@ pub struct Cell {
 #[derive(Default)]
 pub struct Emulators {
     /// Switches the emulated PG70's misbehaviour, if the gripper is one.
-    pub gripper_fault: Option<FaultSwitch<pg70::Misbehaviour>>,
+    pub gripper_fault: Option<FaultSwitch<pg70_emulator::Misbehaviour>>,
     /// Switches the emulated tactile microcontroller's misbehaviour.
-    pub tactile_fault: Option<FaultSwitch<tactile::Misbehaviour>>,
+    pub tactile_fault: Option<FaultSwitch<remodel_emulator::Misbehaviour>>,
     stop: Arc<AtomicBool>,
     threads: Vec<JoinHandle<()>>,
 }

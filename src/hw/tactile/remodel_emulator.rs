@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::Deserialize;
 
-use super::FaultSwitch;
+use crate::hw::emulator::FaultSwitch;
 use crate::hw::nothing_arrived;
 use crate::perception::tactile::{RawFrame, TAXEL_COUNT};
 

@@ -10,8 +10,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::Deserialize;
 
-use super::FaultSwitch;
 use crate::hw::DeviceError;
+use crate::hw::emulator::FaultSwitch;
 use crate::hw::gripper::smp::{Decoder, Frame, Group, command, state_bits};
 use crate::hw::gripper::{GripOutcome, Gripper};
 use crate::hw::nothing_arrived;

@@ -11,8 +11,8 @@ pub use vision::VisionDetector;
 
 use nalgebra::Isometry3;
 
-use super::DeviceError;
-use super::camera::{Camera, CameraImage};
+use crate::hw::DeviceError;
+use crate::hw::camera::{Camera, CameraImage};
 
 /// A cable found in the scene.
 #[derive(Debug, Clone, Copy, PartialEq)]

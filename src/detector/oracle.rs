@@ -8,10 +8,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
 use super::{CableDetection, CableDetector, Detections};
+use crate::cell::file::OracleConfig;
 use crate::hw::DeviceError;
 use crate::hw::camera::Camera;
 use crate::sim::world::{SharedWorld, lock};
-use crate::task::cell_file::OracleConfig;
 
 pub struct OracleDetector {
     world: SharedWorld,

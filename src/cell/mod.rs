@@ -1,0 +1,8 @@
+//! A cell: its file (which backend each device uses, with its limits and
+//! calibration) and the devices built from it.
+
+mod build;
+pub mod file;
+
+pub use build::{Cell, Emulators};
+pub use file::CellFile;
