@@ -7,7 +7,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use cablecell::cell::Cell;
-use cablecell::task::load_cell;
+use cablecell::cell::load_cell;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn detector(c: &mut Criterion) {

@@ -19,6 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use cablecell::cell::load_cell;
 use cablecell::geometry::LineInSensor;
 use cablecell::hw::clock::MonotonicClock;
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
@@ -27,7 +28,6 @@ use cablecell::perception::tactile::{BiasEstimator, FitConfig, fit_wire};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
-use cablecell::task::load_cell;
 use criterion::{Criterion, criterion_group, criterion_main};
 use serialport::{SerialPort, TTYPort};
 

@@ -10,5 +10,6 @@ pub mod orchestrator;
 pub mod perception;
 pub mod record;
 pub mod recording;
+pub mod schema;
 pub mod sim;
 pub mod task;

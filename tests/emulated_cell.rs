@@ -8,15 +8,16 @@ use std::path::Path;
 
 use cablecell::cell::Cell;
 use cablecell::cell::CellFile;
-use cablecell::cell::file::GripperBackend;
+use cablecell::cell::load_cell;
 use cablecell::hw::DeviceKind;
 use cablecell::hw::emulator::{Fault, FaultSwitch};
+use cablecell::hw::gripper::config::GripperBackend;
 use cablecell::hw::gripper::pg70_emulator as pg70;
 use cablecell::hw::tactile::remodel_emulator as tactile;
 use cablecell::orchestrator::{Plan, Runner};
 use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::sim::world::{SharedWorld, lock};
-use cablecell::task::{TaskFile, load_cell, load_task};
+use cablecell::task::{TaskFile, load_task};
 
 const SEED: u64 = 3;
 

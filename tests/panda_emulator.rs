@@ -26,7 +26,7 @@ ee_from_tcp = { translation_mm = [0.0, 0.0, 100.0], rotation_rpy_rad = [0.0, 0.0
 fn without_the_feature_a_panda_cell_says_how_to_build() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "172.16.0.2"));
-    let error = cablecell::task::load_cell(&path)
+    let error = cablecell::cell::load_cell(&path)
         .expect_err("refused")
         .to_string();
     assert!(error.contains("--features panda"), "{error}");
@@ -268,7 +268,7 @@ mod emulated {
         let emulator = PandaEmulator::start(ip(8), start_pose()).expect("emulator");
         let dir = tempfile::tempdir().expect("tempdir");
         let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "127.0.0.8"));
-        let file = cablecell::task::load_cell(&path).expect("cell file");
+        let file = cablecell::cell::load_cell(&path).expect("cell file");
         let mut cell = Cell::build(&file, 1).expect("the cell builds");
         let pose = cell.arm.base_from_tcp().expect("state");
         assert_relative_eq!(pose, start_pose() * ee_from_tcp(), epsilon = 1e-9);
@@ -286,7 +286,7 @@ mod emulated {
         let _turn = one_at_a_time();
         let dir = tempfile::tempdir().expect("tempdir");
         let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "10.0.0.2:1337"));
-        let error = cablecell::task::load_cell(&path)
+        let error = cablecell::cell::load_cell(&path)
             .expect_err("refused")
             .to_string();
         assert!(error.contains("arm.backend.panda.address"), "{error}");

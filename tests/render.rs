@@ -5,7 +5,6 @@
 
 use std::path::Path;
 
-use cablecell::cell::file::WorldConfig;
 use cablecell::perception::vision::calibration::{
     CalibrationError, CameraModel, MarkerOnFinger, MarkerView, calibrate, calibrate_views,
 };
@@ -15,6 +14,7 @@ use cablecell::sim::render::{
     render, render_world, write_dataset,
 };
 use cablecell::sim::world::SimWorld;
+use cablecell::sim::world::WorldConfig;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
 use opencv::core::{self, Mat, Vec3b};

@@ -8,9 +8,10 @@ mod common;
 use common::root;
 
 use cablecell::cell::CellFile;
+use cablecell::cell::load_cell;
 use cablecell::orchestrator::Runner;
 use cablecell::record::{RunOutcome, RunRecord};
-use cablecell::task::{TaskFile, load_cell, load_task};
+use cablecell::task::{TaskFile, load_task};
 
 fn shipped() -> (TaskFile, CellFile) {
     let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");

@@ -12,12 +12,13 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::cell::Cell;
-use cablecell::cell::file::{GripperBackend, TactileBackend};
+use cablecell::cell::load_cell;
+use cablecell::hw::gripper::config::GripperBackend;
 use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
+use cablecell::hw::tactile::config::TactileBackend;
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::hw::{DeviceError, DeviceKind};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
-use cablecell::task::load_cell;
 use serialport::{SerialPort, TTYPort};
 
 fn root() -> &'static Path {

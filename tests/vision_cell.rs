@@ -6,11 +6,11 @@
 mod common;
 
 use cablecell::cell::Cell;
-use cablecell::cell::file::{CameraBackend, CameraSource};
+use cablecell::cell::load_cell;
 use cablecell::hw::DeviceError;
+use cablecell::hw::camera::config::{CameraBackend, CameraSource};
 use cablecell::hw::camera::{Camera, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
-use cablecell::task::load_cell;
 use common::{cablecell, json_of, root};
 use nalgebra::Vector3;
 use opencv::core::{Mat, Scalar};

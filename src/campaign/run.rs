@@ -9,8 +9,10 @@ use std::sync::mpsc;
 use super::journal::{Journal, JournalError};
 use super::trial::{TrialEntry, run_trial};
 use crate::cell::CellFile;
+use crate::cell::load_cell;
+use crate::schema::ConfigError;
 use crate::task::campaign_file::CampaignFile;
-use crate::task::{ConfigError, TaskFile, load_cell, load_task};
+use crate::task::{TaskFile, load_task};
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

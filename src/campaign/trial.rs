@@ -8,8 +8,9 @@ use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use crate::cell::CellFile;
-use crate::cell::file::{ArmBackend, DetectorBackend, OracleConfig};
+use crate::detector::config::{DetectorBackend, OracleConfig};
 use crate::geometry::{LineInSensor, PoseError};
+use crate::hw::arm::config::ArmBackend;
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
 use crate::record::RunOutcome;

@@ -15,18 +15,19 @@ use std::time::Duration;
 use serialport::{SerialPort, TTYPort};
 
 use crate::cell::CellFile;
-use crate::cell::file::{
-    ArmBackend, CameraBackend, DetectorBackend, GripperBackend, SimGripperConfig, SimTactileConfig,
-    TactileBackend,
-};
+use crate::detector::config::DetectorBackend;
 use crate::detector::{CableDetector, OracleDetector, VisionDetector};
 use crate::geometry::LineInSensor;
+use crate::hw::arm::config::ArmBackend;
 use crate::hw::arm::{Arm, SimArm, WorkspaceLimited};
+use crate::hw::camera::config::CameraBackend;
 use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
 use crate::hw::clock::{Clock, MonotonicClock, SimClock};
 use crate::hw::emulator::FaultSwitch;
+use crate::hw::gripper::config::{GripperBackend, SimGripperConfig};
 use crate::hw::gripper::pg70_emulator::{self, Pg70Emulator};
 use crate::hw::gripper::{Gripper, Pg70, SimGripper};
+use crate::hw::tactile::config::TactileBackend;
 use crate::hw::tactile::remodel_emulator::{self, TactileEmulator};
 use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSensor};
 use crate::hw::{DeviceError, DeviceKind};
@@ -34,6 +35,7 @@ use crate::perception::tactile::TAXEL_COUNT;
 use crate::perception::vision::Pipeline;
 use crate::perception::vision::network::{DEFAULT_THRESHOLD, LazyNetwork, runtime_library};
 use crate::sim::motion::CartesianLimits;
+use crate::sim::tactile_model::SimTactileConfig;
 use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};

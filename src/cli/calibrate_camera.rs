@@ -4,9 +4,10 @@
 use std::path::Path;
 
 use cablecell::cell::Cell;
-use cablecell::cell::file::{CameraBackend, FrameConfig};
+use cablecell::cell::load_cell_uncalibrated;
+use cablecell::hw::camera::config::CameraBackend;
 use cablecell::perception::vision::calibration::{CameraCalibration, MarkerView, calibrate_views};
-use cablecell::task::load::load_cell_uncalibrated;
+use cablecell::schema::FrameConfig;
 use nalgebra::Isometry3;
 use opencv::core::Mat;
 

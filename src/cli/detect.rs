@@ -3,11 +3,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cablecell::cell::file::{CellFile, DetectorBackend, FrameConfig};
+use cablecell::cell::CellFile;
+
+use cablecell::detector::config::DetectorBackend;
+
+use cablecell::cell::load_cell_uncalibrated;
 use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
-use cablecell::task::load::load_cell_uncalibrated;
+use cablecell::schema::FrameConfig;
 use opencv::core::Mat;
 use serde::Serialize;
 

@@ -6,12 +6,12 @@ use std::io::Write;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use cablecell::cell::load_cell;
 use cablecell::geometry::LineInSensor;
 use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
-use cablecell::task::load_cell;
 use serialport::{SerialPort, TTYPort};
 
 use super::Status;

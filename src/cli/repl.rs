@@ -6,13 +6,13 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use cablecell::cell::CellFile;
+use cablecell::cell::load_cell;
 use cablecell::hw::DeviceError;
 use cablecell::orchestrator::breakpoint::RunValues;
 use cablecell::orchestrator::driver::{Driver, Mode, Stop};
 use cablecell::orchestrator::params::TaskParams;
 use cablecell::orchestrator::{Command, Plan, Runner, State};
 use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS, TactileMap};
-use cablecell::task::load_cell;
 use rustyline::completion::{Completer, FilenameCompleter, Pair};
 use rustyline::error::ReadlineError;
 use rustyline::highlight::Highlighter;

@@ -3,10 +3,11 @@
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use cablecell::cell::load_cell;
 use cablecell::orchestrator::Runner;
 use cablecell::record::{GraspRecord, RunReport, TransitionRecord};
 use cablecell::record::{RunOutcome, RunRecord};
-use cablecell::task::{load_cell, load_task};
+use cablecell::task::load_task;
 
 use super::Status;
 

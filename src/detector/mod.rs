@@ -3,6 +3,7 @@
 //! campaigns that need controlled start offsets, reads the simulated
 //! world instead.
 
+pub mod config;
 mod oracle;
 mod vision;
 

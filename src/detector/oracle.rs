@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
 use super::{CableDetection, CableDetector, Detections};
-use crate::cell::file::OracleConfig;
+use crate::detector::config::OracleConfig;
 use crate::hw::DeviceError;
 use crate::hw::camera::Camera;
 use crate::sim::world::{SharedWorld, lock};

@@ -450,11 +450,11 @@ mod tests {
     use nalgebra::{Isometry2, Translation3, UnitQuaternion, Vector2, Vector3};
 
     use super::*;
-    use crate::cell::file::SimTactileConfig;
     use crate::detector::{CableDetection, Detections};
     use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
     use crate::hw::{DeviceError, DeviceKind};
     use crate::perception::tactile::{Estimator, FitConfig};
+    use crate::sim::tactile_model::SimTactileConfig;
     use crate::sim::tactile_model::TactileModel;
     use crate::sim::{Stream, rng};
 

@@ -5,8 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::schema::toml_file::{ConfigError, parse, read};
 use crate::task::TaskFile;
-use crate::task::load::{ConfigError, parse, read};
 
 /// Why a parameter could not be set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -4,8 +4,8 @@
 //! regrasps happen (the vision detector rarely leaves one to do).
 
 use crate::cell::CellFile;
-use crate::cell::file::{DetectorBackend, OracleConfig};
-use crate::task::load_cell;
+use crate::cell::load_cell;
+use crate::detector::config::{DetectorBackend, OracleConfig};
 
 pub fn sim_cell_with_oracle() -> CellFile {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

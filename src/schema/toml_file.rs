@@ -1,13 +1,8 @@
-//! Reading TOML files into their schemas, with positions in every error.
+//! Reading a TOML file into its schema, with the position of every error.
 
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
-
-use super::{CampaignFile, TaskFile};
-use crate::cell::CellFile;
-use crate::cell::file::DetectorBackend;
-use crate::perception::vision::MaskMethod;
 
 /// Why a task or cell file could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -37,119 +32,9 @@ pub enum ConfigError {
     UnknownKind { path: PathBuf },
 }
 
-/// What `check_file` found a file to be.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FileKind {
-    Task,
-    Cell,
-    Campaign,
-}
-
-impl std::fmt::Display for FileKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            FileKind::Task => "task file",
-            FileKind::Cell => "cell file",
-            FileKind::Campaign => "campaign file",
-        })
-    }
-}
-
-pub fn load_task(path: &Path) -> Result<TaskFile, ConfigError> {
-    parse(path, &read(path)?)
-}
-
-/// Loads a cell file: its schema, the checks that span several tables,
-/// and its paths made relative to the file's folder.
-pub fn load_cell(path: &Path) -> Result<CellFile, ConfigError> {
-    parse_cell(path, &read(path)?)
-}
-
-/// Loads a cell file that may still lack its camera's calibration, for
-/// the command that makes it.
-pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
-    parse_resolved(path, &read(path)?)
-}
-
-/// A cell file's schema, its paths made relative to its folder.
-fn parse_resolved(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
-    let mut cell: CellFile = parse(path, text)?;
-    cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
-    Ok(cell)
-}
-
-/// A cell file's schema, its paths made relative to its folder, and the
-/// checks that span several tables. The vision detector's are made here,
-/// before the cell moves, rather than when it first looks at the camera.
-fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
-    let cell = parse_resolved(path, text)?;
-    let DetectorBackend::Vision(vision) = &cell.detector.backend else {
-        return Ok(cell);
-    };
-    let refuse = |keys: &[&str], field: &str, message: String| {
-        let (line, column) = key_position(text, keys);
-        Err(ConfigError::Invalid {
-            path: path.to_owned(),
-            line,
-            column,
-            field: field.to_owned(),
-            message,
-        })
-    };
-    if cell.camera.calibration.is_none() {
-        return refuse(
-            &["detector", "backend", "vision"],
-            "camera.calibration",
-            format!(
-                "the vision detector needs the camera's pose in the base frame: \
-                 run `cablecell calibrate-camera --cell {}`",
-                path.display()
-            ),
-        );
-    }
-    if let Some([x, y, width, height]) = vision.roi_px {
-        let image = &cell.camera.intrinsics;
-        let inside = width > 0
-            && height > 0
-            && x >= 0
-            && y >= 0
-            && i64::from(x) + i64::from(width) <= i64::from(image.width_px)
-            && i64::from(y) + i64::from(height) <= i64::from(image.height_px);
-        if !inside {
-            return refuse(
-                &["detector", "backend", "vision", "roi_px"],
-                "detector.backend.vision.roi_px",
-                format!(
-                    "the region of interest x={x} y={y} {width}x{height} px must have an area \
-                     and lie within the camera's {}x{} px image (camera.intrinsics)",
-                    image.width_px, image.height_px
-                ),
-            );
-        }
-    }
-    if vision.mask != MaskMethod::Classical {
-        let unreadable = match std::fs::metadata(&vision.model) {
-            Ok(meta) if meta.is_file() => None,
-            Ok(_) => Some("not a file".to_owned()),
-            Err(error) => Some(error.to_string()),
-        };
-        if let Some(reason) = unreadable {
-            return refuse(
-                &["detector", "backend", "vision", "model"],
-                "detector.backend.vision.model",
-                format!(
-                    "segmentation model {} is missing or unreadable: {reason}",
-                    vision.model.display()
-                ),
-            );
-        }
-    }
-    Ok(cell)
-}
-
 /// Line and column of the last key of `keys` (a path of tables), or of the
 /// file's start if it cannot be found.
-fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
+pub fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
     let offset = toml_edit::Document::parse(text).ok().and_then(|document| {
         let (last, tables) = keys.split_last()?;
         let mut table: &dyn toml_edit::TableLike = document.as_table();
@@ -161,24 +46,7 @@ fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
     line_column(text, offset.unwrap_or(0))
 }
 
-/// Validates a task, cell or campaign file, telling which by its top table.
-pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
-    let text = read(path)?;
-    let table: toml::Table = parse(path, &text)?;
-    if table.contains_key("task") {
-        parse::<TaskFile>(path, &text).map(|_| FileKind::Task)
-    } else if table.contains_key("cell") {
-        parse_cell(path, &text).map(|_| FileKind::Cell)
-    } else if table.contains_key("campaign") {
-        parse::<CampaignFile>(path, &text).map(|_| FileKind::Campaign)
-    } else {
-        Err(ConfigError::UnknownKind {
-            path: path.to_owned(),
-        })
-    }
-}
-
-pub(crate) fn read(path: &Path) -> Result<String, ConfigError> {
+pub fn read(path: &Path) -> Result<String, ConfigError> {
     std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
         path: path.to_owned(),
         source,
@@ -187,7 +55,7 @@ pub(crate) fn read(path: &Path) -> Result<String, ConfigError> {
 
 /// Deserialises `text`; an error carries the key path (serde_path_to_error)
 /// and the span (toml) turned into a 1-based line and column.
-pub(crate) fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T, ConfigError> {
+pub fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T, ConfigError> {
     let deserializer = match toml::Deserializer::parse(text) {
         Ok(d) => d,
         Err(e) => return Err(invalid(path, text, String::new(), &e)),

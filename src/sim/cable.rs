@@ -14,7 +14,7 @@
 //!
 //! See docs/simulated-cell.md for the model and the reasons for its values.
 
-use crate::cell::file::WorldConfig;
+use super::world::WorldConfig;
 use crate::geometry::LineInSensor;
 
 /// Half the width of the jaws' pads, the lever of a turn of the cable

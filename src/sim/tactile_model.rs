@@ -28,10 +28,36 @@
 use nalgebra::Vector2;
 use rand::{Rng, RngExt};
 use rand_distr::StandardNormal;
+use serde::Deserialize;
 
-use crate::cell::file::SimTactileConfig;
 use crate::geometry::LineInSensor;
 use crate::perception::tactile::{ADC_MAX, RawFrame, TAXEL_COLS, TAXEL_COUNT};
+use crate::schema::validate::{fraction, positive, voltage_range};
+
+/// The first simulated pad: a line-spread response, per-taxel offsets and
+/// gains, a saturating photo-reflector and noise. See `sim::tactile_model`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimTactileConfig {
+    /// Width (σ) of the cap's deformation across the cable, in pitches.
+    #[serde(deserialize_with = "positive")]
+    pub line_spread_pitch: f64,
+    /// Voltage swing of a taxel from rest to full deformation.
+    #[serde(deserialize_with = "positive")]
+    pub span_v: f64,
+    /// Range of the taxels' resting voltages (drawn once per cell).
+    #[serde(deserialize_with = "voltage_range")]
+    pub rest_v: [f64; 2],
+    /// Relative spread of the taxels' gains (drawn once per cell).
+    #[serde(deserialize_with = "fraction")]
+    pub gain_spread: f64,
+    /// Noise standard deviation as a fraction of `span_v`.
+    #[serde(deserialize_with = "fraction")]
+    pub noise_fraction: f64,
+    /// Fault injection: the sensor stops answering after this many frames.
+    #[serde(default)]
+    pub silent_after_frames: Option<u64>,
+}
 
 /// ADC full scale of the sensor's microcontroller.
 const ADC_FULL_SCALE_V: f64 = 3.3;

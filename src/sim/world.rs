@@ -6,8 +6,64 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
 
 use super::cable::CableModel;
-use crate::cell::file::WorldConfig;
 use crate::geometry::{LineInSensor, planar_to_spatial};
+use crate::schema::validate::{finite, fraction, non_negative, positive, vector3};
+use serde::Deserialize;
+
+/// The simulated scene: one cable resting on two supports, sagging under
+/// its own weight, that the jaws drag and that springs back. See
+/// `sim::cable` and docs/simulated-cell.md.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldConfig {
+    #[serde(deserialize_with = "positive")]
+    pub cable_diameter_mm: f64,
+    /// The cable's midpoint between the supports (its lowest point, where
+    /// the detector puts the grasp frame), in the base frame.
+    #[serde(deserialize_with = "vector3")]
+    pub cable_center_mm: [f64; 3],
+    /// Direction of the cable in the base's horizontal plane.
+    #[serde(deserialize_with = "finite")]
+    pub cable_yaw_rad: f64,
+    /// Inclination of the line between the supports from horizontal.
+    #[serde(deserialize_with = "finite")]
+    pub cable_tilt_rad: f64,
+    /// How far across the pad a cable can lie and still end up between the
+    /// closing fingers.
+    #[serde(deserialize_with = "positive")]
+    pub capture_half_height_mm: f64,
+    /// Distance between the two supports.
+    #[serde(deserialize_with = "positive")]
+    pub support_span_mm: f64,
+    /// The cable's weight per length (0 for a straight cable).
+    #[serde(deserialize_with = "non_negative")]
+    pub cable_weight_n_mm: f64,
+    /// Bending stiffness EI: with the weight it sets the sag, and with the
+    /// span the cable's resistance to being shifted (48 EI / L³) or turned
+    /// (12 EI / L a², a the jaws' half-width) on the pad.
+    #[serde(deserialize_with = "positive")]
+    pub bending_stiffness_n_mm2: f64,
+    /// The closing jaws' drag, as the resistance at which a cable settles
+    /// half of `settle_fraction`: a cable softer than this is dragged.
+    #[serde(deserialize_with = "positive")]
+    pub jaw_drag_stiffness_n_mm: f64,
+    /// What holds a bend once the jaws open (the strands' internal
+    /// friction, the silicone's grip), as the resistance at which a cable
+    /// recovers half of `spring_back_fraction`: a cable stiffer than this
+    /// springs back.
+    #[serde(deserialize_with = "positive")]
+    pub hold_stiffness_n_mm: f64,
+    /// For a limp cable, the fraction of the caught pose's distance from
+    /// the pad's axis (offset and angle) that the closing jaws remove; 0
+    /// switches settling off.
+    #[serde(deserialize_with = "fraction")]
+    pub settle_fraction: f64,
+    /// For a cable far stiffer than what holds a bend, the fraction of the
+    /// displacement the grasp imposed that it recovers when the jaws open
+    /// (below 1: copper strands take a set); 0 switches spring-back off.
+    #[serde(deserialize_with = "fraction")]
+    pub spring_back_fraction: f64,
+}
 
 /// The world as the simulated devices share it.
 pub type SharedWorld = Arc<Mutex<SimWorld>>;

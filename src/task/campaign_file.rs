@@ -5,11 +5,11 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Deserializer, de::Error};
 
-use super::load::{ConfigError, parse, read};
 use super::task_file::Tolerance;
-use super::validate::{at_least_one, non_negative, non_negative_range};
 use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
+use crate::schema::toml_file::{ConfigError, parse, read};
+use crate::schema::validate::{at_least_one, non_negative, non_negative_range};
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
 #[derive(Debug, Clone, Deserialize)]

@@ -10,8 +10,7 @@
 pub mod campaign_file;
 pub mod load;
 pub mod task_file;
-pub(crate) mod validate;
 
 pub use campaign_file::CampaignFile;
-pub use load::{ConfigError, FileKind, check_file, load_cell, load_task};
+pub use load::{FileKind, check_file, load_task};
 pub use task_file::TaskFile;

@@ -2,9 +2,9 @@
 
 use serde::Deserialize;
 
-use super::validate::{at_least_one, finite, line_angle, positive};
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::Estimator;
+use crate::schema::validate::{at_least_one, finite, line_angle, positive};
 
 /// A task file, e.g. `tasks/regrasp.toml`.
 #[derive(Debug, Clone, Deserialize)]

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use cablecell::cell::CellFile;
-use cablecell::cell::file::{DetectorBackend, OracleConfig};
-use cablecell::task::load_cell;
+use cablecell::cell::load_cell;
+use cablecell::detector::config::{DetectorBackend, OracleConfig};
 
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

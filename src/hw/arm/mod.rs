@@ -1,6 +1,7 @@
 //! The arm: Cartesian poses of the tool centre point (TCP) in the base
 //! frame, as the Panda takes them.
 
+pub mod config;
 #[cfg(feature = "panda")]
 pub mod panda;
 #[cfg(feature = "panda")]

@@ -1,6 +1,7 @@
 //! The 2D camera that watches the cable: one image per capture, 8-bit BGR,
 //! of the size its intrinsics give.
 
+pub mod config;
 mod image_file;
 mod opencv_camera;
 mod sim;

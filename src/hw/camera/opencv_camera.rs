@@ -10,7 +10,7 @@ use opencv::prelude::*;
 use opencv::videoio::{self, VideoCapture};
 
 use super::{Camera, read_image};
-use crate::cell::file::CameraSource;
+use crate::hw::camera::config::CameraSource;
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::vision::calibration::CameraModel;
 

@@ -1,6 +1,7 @@
 //! The parallel gripper: jaw opening in mm and grip by motor current, as
 //! the Schunk PG70 takes them.
 
+pub mod config;
 mod pg70;
 pub mod pg70_emulator;
 mod sim;

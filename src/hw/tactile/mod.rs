@@ -1,6 +1,7 @@
 //! The tactile pad: raw 12-bit readings of its 25 taxels, polled at the
 //! sensor's rate (500 Hz in the paper).
 
+pub mod config;
 mod polled;
 mod remodel;
 pub mod remodel_emulator;
