@@ -3,8 +3,6 @@
 
 use serde::{Deserialize, Deserializer, de::Error};
 
-use crate::perception::vision::calibration::CameraModel;
-
 /// A number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     let v = f64::deserialize(d)?;
@@ -93,19 +91,6 @@ pub fn unit_vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Erro
     } else {
         Err(D::Error::custom(
             "expected a direction, found a zero vector",
-        ))
-    }
-}
-
-/// A camera's intrinsics: a positive image size and focal lengths, a
-/// finite principal point.
-pub fn camera_model<'de, D: Deserializer<'de>>(d: D) -> Result<CameraModel, D::Error> {
-    let model = CameraModel::deserialize(d)?;
-    if model.is_valid() {
-        Ok(model)
-    } else {
-        Err(D::Error::custom(
-            "expected a positive image size and focal lengths and a finite principal point",
         ))
     }
 }
