@@ -14,14 +14,12 @@
 
 use std::hint::black_box;
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::cell::load_cell;
 use cablecell::geometry::LineInSensor;
 use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::hw::tactile::{PolledTactile, RemodelTactile, SerialLink, TactileSensor};
 use cablecell::perception::tactile::{BiasEstimator, FitConfig, fit_wire};
@@ -31,24 +29,9 @@ use cablecell::sim::{Stream, rng};
 use criterion::{Criterion, criterion_group, criterion_main};
 use serialport::{SerialPort, TTYPort};
 
-/// The emulated microcontroller on its thread, until dropped.
-struct Emulated {
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
-}
-
-impl Drop for Emulated {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(thread) = self.thread.take() {
-            let _ = thread.join();
-        }
-    }
-}
-
 /// The driver on a pseudo-terminal to an emulated pad with a cable on it
 /// (or none).
-fn driver(cable: bool) -> (RemodelTactile<TTYPort>, Emulated) {
+fn driver(cable: bool) -> (RemodelTactile<TTYPort>, PtyEmulator) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut file = load_cell(&root.join("config/cell.sim.toml")).expect("the simulated cell");
     let pitch_mm = file.tactile.pitch_mm;
@@ -56,30 +39,23 @@ fn driver(cable: bool) -> (RemodelTactile<TTYPort>, Emulated) {
     let model = TactileModel::new(pad, pitch_mm, &mut rng(1, Stream::TactileCalibration));
     let mut noise = rng(1, Stream::Tactile);
     let on_pad = cable.then_some((LineInSensor::new(0.1, 1.0), 2.5));
-    let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
-    master
-        .set_timeout(Duration::from_millis(5))
-        .expect("timeout");
+    let layout = std::array::from_fn(|k| k);
+    let (emulator, mut slave) = PtyEmulator::start(move |master, stop| {
+        TactileEmulator::new(layout, move || Some(model.frame(on_pad, &mut noise)))
+            .serve(master, stop)
+    })
+    .expect("a pseudo-terminal");
     slave
         .set_timeout(Duration::from_millis(2))
         .expect("timeout");
-    let stop = Arc::new(AtomicBool::new(false));
-    let serving = Arc::clone(&stop);
-    let layout = std::array::from_fn(|k| k);
-    let thread = std::thread::spawn(move || {
-        TactileEmulator::new(layout, move || Some(model.frame(on_pad, &mut noise)))
-            .serve(master, &serving)
-    });
-    let name = slave.name().unwrap_or_default();
-    let driver = RemodelTactile::new(slave, &name, layout, Box::new(MonotonicClock::new()))
-        .with_deadline(Duration::from_millis(200));
-    (
-        driver,
-        Emulated {
-            stop,
-            thread: Some(thread),
-        },
+    let driver = RemodelTactile::new(
+        slave,
+        emulator.path(),
+        layout,
+        Box::new(MonotonicClock::new()),
     )
+    .with_deadline(Duration::from_millis(200));
+    (driver, emulator)
 }
 
 /// A link that answers every `'a'` with the same 50 bytes, from memory.

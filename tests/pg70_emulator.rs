@@ -1,59 +1,42 @@
 //! The PG70 driver against the emulated module on a pseudo-terminal,
 //! including the module misbehaving and the port vanishing.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::hw::DeviceError;
 use cablecell::hw::emulator::Fault;
+use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Misbehaviour, Pg70Emulator};
 use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
 use serialport::{SerialPort, TTYPort};
 
 struct Bench {
     driver: Pg70<TTYPort>,
-    stop: Arc<AtomicBool>,
-    emulator: Option<JoinHandle<()>>,
+    emulator: PtyEmulator,
 }
 
 impl Bench {
     fn new(misbehaviour: Option<Misbehaviour>, object_mm: Option<f64>) -> Self {
-        let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
-        master
-            .set_timeout(Duration::from_millis(5))
-            .expect("timeout");
+        let (emulator, mut slave) = PtyEmulator::start(move |master, stop| {
+            let mut module = Pg70Emulator::new(12, FreeJaws::new(object_mm));
+            module.fault.set(misbehaviour.map(Fault::now));
+            module.serve(master, stop);
+        })
+        .expect("a pseudo-terminal");
         slave
             .set_timeout(Duration::from_millis(5))
             .expect("timeout");
-        let stop = Arc::new(AtomicBool::new(false));
-        let serving = Arc::clone(&stop);
-        let emulator = std::thread::spawn(move || {
-            let mut module = Pg70Emulator::new(12, FreeJaws::new(object_mm));
-            module.fault.set(misbehaviour.map(Fault::now));
-            module.serve(master, &serving);
-        });
-        let name = slave.name().unwrap_or_else(|| "pty".into());
         Self {
-            driver: Pg70::new(slave, &name, 12),
-            stop,
-            emulator: Some(emulator),
+            driver: Pg70::new(slave, emulator.path(), 12),
+            emulator,
         }
     }
 
     /// Closes the emulator's end: the device is unplugged.
     fn unplug(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(emulator) = self.emulator.take() {
-            emulator.join().expect("emulator thread");
-        }
-    }
-}
-
-impl Drop for Bench {
-    fn drop(&mut self) {
-        self.unplug();
+        self.emulator
+            .unplug()
+            .expect("the emulator thread ends well");
     }
 }
 

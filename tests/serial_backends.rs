@@ -6,20 +6,18 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
-use std::time::Duration;
+use std::sync::atomic::AtomicBool;
 
 use cablecell::cell::Cell;
 use cablecell::cell::load_cell;
+use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::gripper::config::GripperBackend;
 use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
 use cablecell::hw::tactile::config::TactileBackend;
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::hw::{DeviceError, DeviceKind};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
-use serialport::{SerialPort, TTYPort};
+use serialport::TTYPort;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -28,36 +26,21 @@ fn root() -> &'static Path {
 /// An emulator serving a pseudo-terminal whose slave end stays open (so
 /// the master's reads keep working) for a driver to open by path.
 struct Served {
-    path: String,
+    emulator: PtyEmulator,
     _slave: TTYPort,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
 }
 
 impl Served {
     fn start(serve: impl FnOnce(TTYPort, &AtomicBool) + Send + 'static) -> Self {
-        let (mut master, slave) = TTYPort::pair().expect("a pseudo-terminal");
-        master
-            .set_timeout(Duration::from_millis(5))
-            .expect("timeout");
-        let stop = Arc::new(AtomicBool::new(false));
-        let serving = Arc::clone(&stop);
-        let thread = std::thread::spawn(move || serve(master, &serving));
+        let (emulator, slave) = PtyEmulator::start(serve).expect("a pseudo-terminal");
         Self {
-            path: slave.name().expect("the slave's path"),
+            emulator,
             _slave: slave,
-            stop,
-            thread: Some(thread),
         }
     }
-}
 
-impl Drop for Served {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(thread) = self.thread.take() {
-            thread.join().expect("emulator thread");
-        }
+    fn path(&self) -> &str {
+        self.emulator.path()
     }
 }
 
@@ -106,11 +89,11 @@ fn the_real_backends_open_their_ports_and_speak_through_the_drivers() {
     let text = cell_text(
         &format!(
             "[gripper.backend.pg70]\nport = \"{}\"\nmodule_id = 7\nmotion = {{ speed_mm_s = 50.0, accel_mm_s2 = 200.0 }}",
-            gripper.path
+            gripper.path()
         ),
         &format!(
             "[tactile.backend.remodel]\nport = \"{}\"\nlayout = [{}]\ndeadline_ms = 200",
-            tactile.path,
+            tactile.path(),
             layout.join(", ")
         ),
     );

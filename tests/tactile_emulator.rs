@@ -2,14 +2,12 @@
 //! pseudo-terminal: the taxel layout, 12-bit samples, and the sensor
 //! misbehaving or unplugged.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::Duration;
 
 use cablecell::hw::DeviceError;
 use cablecell::hw::clock::MonotonicClock;
 use cablecell::hw::emulator::Fault;
+use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::tactile::remodel_emulator::{Misbehaviour, TactileEmulator};
 use cablecell::hw::tactile::{RemodelTactile, TactileSensor};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
@@ -27,50 +25,37 @@ fn frame(n: u16) -> RawFrame {
 
 struct Bench {
     driver: RemodelTactile<TTYPort>,
-    stop: Arc<AtomicBool>,
-    emulator: Option<JoinHandle<()>>,
+    emulator: PtyEmulator,
 }
 
 impl Bench {
     fn new(fault: Option<Fault<Misbehaviour>>) -> Self {
-        let (mut master, mut slave) = TTYPort::pair().expect("a pseudo-terminal");
-        master
-            .set_timeout(Duration::from_millis(2))
-            .expect("timeout");
-        slave
-            .set_timeout(Duration::from_millis(2))
-            .expect("timeout");
-        let stop = Arc::new(AtomicBool::new(false));
-        let serving = Arc::clone(&stop);
-        let emulator = std::thread::spawn(move || {
+        let (emulator, mut slave) = PtyEmulator::start(move |master, stop| {
             let mut n = 0;
             let mut mcu = TactileEmulator::new(reversed(), move || {
                 n += 1;
                 Some(frame(n))
             });
             mcu.fault.set(fault);
-            mcu.serve(master, &serving);
-        });
-        let name = slave.name().unwrap_or_else(|| "pty".into());
-        let driver = RemodelTactile::new(slave, &name, reversed(), Box::new(MonotonicClock::new()));
-        Self {
-            driver,
-            stop,
-            emulator: Some(emulator),
-        }
+            mcu.serve(master, stop);
+        })
+        .expect("a pseudo-terminal");
+        slave
+            .set_timeout(Duration::from_millis(2))
+            .expect("timeout");
+        let driver = RemodelTactile::new(
+            slave,
+            emulator.path(),
+            reversed(),
+            Box::new(MonotonicClock::new()),
+        );
+        Self { driver, emulator }
     }
 
     fn unplug(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(emulator) = self.emulator.take() {
-            emulator.join().expect("emulator thread");
-        }
-    }
-}
-
-impl Drop for Bench {
-    fn drop(&mut self) {
-        self.unplug();
+        self.emulator
+            .unplug()
+            .expect("the emulator thread ends well");
     }
 }
 

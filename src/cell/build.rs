@@ -7,9 +7,7 @@
 //! thread of its own, acting on the simulated world). Every arm is wrapped
 //! in the cell's workspace and speed limits.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use serialport::{SerialPort, TTYPort};
@@ -23,7 +21,7 @@ use crate::hw::arm::{Arm, SimArm, WorkspaceLimited};
 use crate::hw::camera::config::CameraBackend;
 use crate::hw::camera::{Camera, OpencvCamera, SimCamera};
 use crate::hw::clock::{Clock, MonotonicClock, SimClock};
-use crate::hw::emulator::FaultSwitch;
+use crate::hw::emulator::{FaultSwitch, PtyEmulator};
 use crate::hw::gripper::config::{GripperBackend, SimGripperConfig};
 use crate::hw::gripper::pg70_emulator::{self, Pg70Emulator};
 use crate::hw::gripper::{Gripper, Pg70, SimGripper};
@@ -63,42 +61,25 @@ pub struct Emulators {
     pub gripper_fault: Option<FaultSwitch<pg70_emulator::Misbehaviour>>,
     /// Switches the emulated tactile microcontroller's misbehaviour.
     pub tactile_fault: Option<FaultSwitch<remodel_emulator::Misbehaviour>>,
-    stop: Arc<AtomicBool>,
-    threads: Vec<JoinHandle<()>>,
-}
-
-impl Drop for Emulators {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        for thread in self.threads.drain(..) {
-            // A panicking emulator has already reported itself.
-            let _ = thread.join();
-        }
-    }
+    running: Vec<PtyEmulator>,
 }
 
 impl Emulators {
-    /// A new pseudo-terminal whose master end `serve` takes on a thread of
-    /// its own; returns the slave end and its path, for the driver.
+    /// Starts an emulator on a new pseudo-terminal (see [`PtyEmulator`]);
+    /// returns the slave end and its path, for the driver.
     fn start(
         &mut self,
         device: DeviceKind,
         serve: impl FnOnce(TTYPort, &AtomicBool) + Send + 'static,
     ) -> Result<(TTYPort, String), DeviceError> {
-        let unavailable = |reason: String| DeviceError::Disconnected {
-            device,
-            port: "a new pseudo-terminal".into(),
-            reason,
-        };
-        let (mut master, slave) =
-            TTYPort::pair().map_err(|e| unavailable(format!("cannot make one: {e}")))?;
-        master
-            .set_timeout(Duration::from_millis(10))
-            .map_err(|e| unavailable(e.to_string()))?;
-        let path = slave.name().unwrap_or_else(|| "pseudo-terminal".into());
-        let stop = Arc::clone(&self.stop);
-        self.threads
-            .push(std::thread::spawn(move || serve(master, &stop)));
+        let (emulator, slave) =
+            PtyEmulator::start(serve).map_err(|e| DeviceError::Disconnected {
+                device,
+                port: "a new pseudo-terminal".into(),
+                reason: format!("cannot make one: {e}"),
+            })?;
+        let path = emulator.path().to_owned();
+        self.running.push(emulator);
         Ok((slave, path))
     }
 }

@@ -4,15 +4,15 @@
 
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
-use std::time::Duration;
 
 use cablecell::cell::load_cell;
 use cablecell::geometry::LineInSensor;
+use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::gripper::pg70_emulator::{FreeJaws, Pg70Emulator};
 use cablecell::hw::tactile::remodel_emulator::TactileEmulator;
 use cablecell::sim::tactile_model::TactileModel;
 use cablecell::sim::{Stream, rng};
-use serialport::{SerialPort, TTYPort};
+use serialport::TTYPort;
 
 use super::Status;
 
@@ -22,28 +22,17 @@ pub enum Emulated {
     Tactile,
 }
 
+/// What an emulator does with its end of the pseudo-terminal.
+type Serve = Box<dyn FnOnce(TTYPort, &AtomicBool) + Send>;
+
 pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Status {
-    let (mut master, slave) = match TTYPort::pair() {
-        Ok(pair) => pair,
-        Err(error) => {
-            eprintln!("error: cannot make a pseudo-terminal: {error}");
-            return Status::OutputFailed;
-        }
-    };
-    let path = slave.name().unwrap_or_default();
-    if let Err(error) = master.set_timeout(Duration::from_millis(10)) {
-        eprintln!("error: {path}: {error}");
-        return Status::OutputFailed;
-    }
-    // Held open for as long as we serve: with no slave open, the master's
-    // reads fail, and clients come and go.
-    let _slave = slave;
-    let never = AtomicBool::new(false);
-    match device {
-        Emulated::Pg70 => {
-            announce(&path, &format!("a PG70, module id {module_id}"));
-            Pg70Emulator::new(module_id, FreeJaws::new(None)).serve(master, &never);
-        }
+    let (what, serve): (String, Serve) = match device {
+        Emulated::Pg70 => (
+            format!("a PG70, module id {module_id}"),
+            Box::new(move |master, stop| {
+                Pg70Emulator::new(module_id, FreeJaws::new(None)).serve(master, stop)
+            }),
+        ),
         Emulated::Tactile => {
             let mut file = match load_cell(cell) {
                 Ok(file) => file,
@@ -67,15 +56,29 @@ pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Statu
             // A 2.5 mm cable lying across the pad, slightly off its axis.
             let cable = Some((LineInSensor::new(0.1, 1.0), 2.5));
             let identity = std::array::from_fn(|k| k);
-            announce(
-                &path,
-                "the tactile finger's microcontroller, a cable on the pad",
-            );
-            TactileEmulator::new(identity, move || Some(model.frame(cable, &mut noise)))
-                .serve(master, &never);
+            (
+                "the tactile finger's microcontroller, a cable on the pad".to_owned(),
+                Box::new(move |master, stop| {
+                    TactileEmulator::new(identity, move || Some(model.frame(cable, &mut noise)))
+                        .serve(master, stop)
+                }),
+            )
         }
+    };
+    // The slave end is held open for as long as we serve: with no slave
+    // open, the master's reads fail, and clients come and go.
+    let (emulator, _slave) = match PtyEmulator::start(serve) {
+        Ok(started) => started,
+        Err(error) => {
+            eprintln!("error: cannot make a pseudo-terminal: {error}");
+            return Status::OutputFailed;
+        }
+    };
+    announce(emulator.path(), &what);
+    match emulator.wait() {
+        Ok(()) => Status::Success,
+        Err(_) => Status::DeviceFault,
     }
-    Status::Success
 }
 
 fn announce(path: &str, what: &str) {

@@ -2,9 +2,13 @@
 //! protocols on a byte stream (a pseudo-terminal in the tests), and can
 //! misbehave on purpose, so that the real drivers are tested end to end.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::Duration;
 
 use serde::Deserialize;
+use serialport::{SerialPort, TTYPort};
 
 /// How an emulator misbehaves, and from which request on: the first
 /// `after_requests` requests are answered properly.
@@ -55,5 +59,67 @@ impl<M: Copy> FaultSwitch<M> {
 impl<M: Copy> Default for FaultSwitch<M> {
     fn default() -> Self {
         Self::new(None)
+    }
+}
+
+/// An emulator serving the master end of a new pseudo-terminal on a
+/// thread of its own until it is unplugged or dropped: what the emulated
+/// cell, `cablecell emulate`, the driver tests and the polling benchmark
+/// all run a device emulator in.
+pub struct PtyEmulator {
+    path: String,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+/// How long the emulator's reads wait before it looks at its stop flag.
+const MASTER_READ_TIMEOUT: Duration = Duration::from_millis(5);
+
+impl PtyEmulator {
+    /// Makes a new pseudo-terminal and hands its master end to `serve` on a
+    /// new thread; `serve` returns once the flag it is given is set.
+    /// Returns the harness and the slave end, for a driver to talk through
+    /// (or to hold open while a driver opens the port by its path: with no
+    /// slave open the master's reads fail).
+    pub fn start(
+        serve: impl FnOnce(TTYPort, &AtomicBool) + Send + 'static,
+    ) -> Result<(Self, TTYPort), serialport::Error> {
+        let (mut master, slave) = TTYPort::pair()?;
+        master.set_timeout(MASTER_READ_TIMEOUT)?;
+        let path = slave.name().unwrap_or_else(|| "a pseudo-terminal".into());
+        let stop = Arc::new(AtomicBool::new(false));
+        let serving = Arc::clone(&stop);
+        let thread = std::thread::spawn(move || serve(master, &serving));
+        let emulator = Self {
+            path,
+            stop,
+            thread: Some(thread),
+        };
+        Ok((emulator, slave))
+    }
+
+    /// The slave end's path, e.g. `/dev/pts/3`.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// Stops the emulator and closes its end, as if the device were
+    /// unplugged; an `Err` carries the emulator thread's panic.
+    pub fn unplug(&mut self) -> std::thread::Result<()> {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.take().map_or(Ok(()), JoinHandle::join)
+    }
+
+    /// Serves until the emulator thread ends (for `cablecell emulate`,
+    /// which serves until it is killed).
+    pub fn wait(mut self) -> std::thread::Result<()> {
+        self.thread.take().map_or(Ok(()), JoinHandle::join)
+    }
+}
+
+impl Drop for PtyEmulator {
+    fn drop(&mut self) {
+        // A panicking emulator has already reported itself.
+        let _ = self.unplug();
     }
 }
