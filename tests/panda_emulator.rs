@@ -98,14 +98,12 @@ mod emulated {
         )
     }
 
-    const MAX_SPEED_MM_S: f64 = 50.0;
     const FRACTION: f64 = 0.1;
 
     fn panda(last: u8) -> Panda {
         Panda::new(
             &format!("127.0.0.{last}"),
             ee_from_tcp(),
-            MAX_SPEED_MM_S,
             panda_limits(FRACTION),
         )
     }
@@ -245,20 +243,15 @@ mod emulated {
     fn too_fast_a_move_is_refused_before_anything_is_sent() {
         let _turn = one_at_a_time();
         let emulator = PandaEmulator::start(ip(7), start_pose()).expect("emulator");
-        let mut arm = panda(7);
-        let error = arm
-            .move_linear(&start_pose(), MAX_SPEED_MM_S * 2.0)
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "127.0.0.7"));
+        let file = cablecell::cell::load_cell(&path).expect("cell file");
+        let mut cell = Cell::build(&file, 1).expect("the cell builds");
+        let error = cell
+            .arm
+            .move_linear(&start_pose(), file.arm.max_speed_mm_s * 2.0)
             .expect_err("too fast");
-        assert!(
-            matches!(
-                error,
-                DeviceError::Refused {
-                    command: "move_linear",
-                    ..
-                }
-            ),
-            "{error:?}"
-        );
+        assert!(matches!(error, DeviceError::TooFast { .. }), "{error:?}");
         assert_eq!(emulator.report().handshakes, 0);
     }
 
@@ -323,15 +316,16 @@ mod emulated {
             epsilon = 1e-6
         );
 
-        // Too far, or too fast: refused before connecting.
-        for args in [
-            &["move-rel", "60", "0", "0"][..],
-            &["move-rel", "1", "0", "0", "--speed", "50"],
-        ] {
-            let (status, _, err) = device_arm(9, args);
-            assert_eq!(status, Some(2), "{err}");
-            assert!(err.contains("at most 50 mm at (0, 20] mm/s"), "{err}");
-        }
+        // Too far, or too fast: refused before the arm moves.
+        let (status, _, err) = device_arm(9, &["move-rel", "60", "0", "0"]);
+        assert_eq!(status, Some(2), "{err}");
+        assert!(err.contains("at most 50 mm"), "{err}");
+        let (status, _, err) = device_arm(9, &["move-rel", "1", "0", "0", "--speed", "50"]);
+        assert_eq!(status, Some(2), "{err}");
+        assert!(
+            err.contains("refused move_linear at 50 mm/s: the cell allows (0, 20] mm/s"),
+            "{err}"
+        );
         assert_eq!(emulator.report().motions_finished, 1);
     }
 

@@ -105,7 +105,6 @@ impl Cell {
         let arm: Box<dyn Arm> = match &file.arm.backend {
             ArmBackend::Sim(sim) => Box::new(SimArm::new(
                 world.clone(),
-                file.arm.max_speed_mm_s,
                 CartesianLimits {
                     accel_mm_s2: sim.max_accel_mm_s2,
                     jerk_mm_s3: sim.max_jerk_mm_s3,
@@ -120,7 +119,6 @@ impl Cell {
             ArmBackend::Panda(panda) => Box::new(crate::hw::arm::Panda::new(
                 &panda.address,
                 panda.ee_from_tcp.isometry(),
-                file.arm.max_speed_mm_s,
                 crate::hw::arm::panda::panda_limits(panda.dynamics_fraction),
             )),
             #[cfg(not(feature = "panda"))]

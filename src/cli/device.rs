@@ -79,7 +79,7 @@ pub enum ArmAction {
 #[cfg(feature = "panda")]
 pub fn arm(address: &str, action: &ArmAction) -> Status {
     use cablecell::hw::arm::panda::panda_limits;
-    use cablecell::hw::arm::{Arm, Panda};
+    use cablecell::hw::arm::{Arm, Panda, WorkspaceBox, WorkspaceLimited};
     use nalgebra::{Isometry3, Translation3, Vector3};
     // A bring-up move: short and slow enough to stop by hand, with a tenth
     // of the Panda's acceleration and jerk.
@@ -98,14 +98,13 @@ pub fn arm(address: &str, action: &ArmAction) -> Status {
         dx_mm,
         dy_mm,
         dz_mm,
-        speed_mm_s,
+        ..
     } = action
     {
         let offset_mm = Vector3::new(*dx_mm, *dy_mm, *dz_mm);
-        if !(offset_mm.norm() <= MOVE_MAX_MM && *speed_mm_s > 0.0 && *speed_mm_s <= SPEED_MAX_MM_S)
-        {
+        if !(offset_mm.norm() <= MOVE_MAX_MM) {
             eprintln!(
-                "error: move-rel moves at most {MOVE_MAX_MM} mm at (0, {SPEED_MAX_MM_S}] mm/s; asked {:.1} mm at {speed_mm_s} mm/s",
+                "error: move-rel moves at most {MOVE_MAX_MM} mm; asked {:.1} mm",
                 offset_mm.norm()
             );
             return Status::BadInput;
@@ -114,7 +113,6 @@ pub fn arm(address: &str, action: &ArmAction) -> Status {
     let mut panda = Panda::new(
         address,
         Isometry3::identity(),
-        SPEED_MAX_MM_S,
         panda_limits(DYNAMICS_FRACTION),
     );
     let result = match action {
@@ -124,14 +122,21 @@ pub fn arm(address: &str, action: &ArmAction) -> Status {
             dy_mm,
             dz_mm,
             speed_mm_s,
-        } => {
+        } => (move || {
+            let start = panda.base_from_tcp()?;
+            // The cell's limits, whatever the arm: here a box around the
+            // start that the move may not leave, and the speed limit.
+            let at_mm: [f64; 3] = start.translation.vector.into();
+            let workspace = WorkspaceBox {
+                min_mm: at_mm.map(|x| x - MOVE_MAX_MM),
+                max_mm: at_mm.map(|x| x + MOVE_MAX_MM),
+            };
+            let mut arm = WorkspaceLimited::new(panda, workspace, SPEED_MAX_MM_S);
             let offset = Translation3::new(*dx_mm, *dy_mm, *dz_mm);
-            panda
-                .base_from_tcp()
-                .and_then(|start| panda.move_linear(&(offset * start), *speed_mm_s))
-                .and_then(|()| panda.base_from_tcp())
+            arm.move_linear(&(offset * start), *speed_mm_s)?;
+            arm.base_from_tcp()
                 .map(|end| format!("moved; {}", describe(&end)))
-        }
+        })(),
         ArmAction::Stop => panda.stop().map(|()| "stopped".into()),
         ArmAction::Recover => panda.recover().map(|()| "errors cleared".into()),
     };
@@ -288,10 +293,17 @@ fn read(
 }
 
 fn report(result: Result<String, cablecell::hw::DeviceError>) -> Status {
+    use cablecell::hw::DeviceError;
     match result {
         Ok(text) => {
             println!("{text}");
             Status::Success
+        }
+        // Refused by the limits before the arm was asked: the command
+        // line asked for too much.
+        Err(error @ (DeviceError::TooFast { .. } | DeviceError::OutsideWorkspace { .. })) => {
+            eprintln!("error: {error}");
+            Status::BadInput
         }
         Err(error) => {
             eprintln!("error: {error}");

@@ -127,7 +127,6 @@ pub struct Panda {
     /// The TCP in the end-effector frame the controller reports (`EE`, set
     /// in Desk).
     ee_from_tcp: Isometry3<f64>,
-    max_speed_mm_s: f64,
     limits: CartesianLimits,
     session: Option<Session>,
 }
@@ -135,16 +134,10 @@ pub struct Panda {
 impl Panda {
     /// A Panda at `address` (host name or IP; the port is the protocol's).
     /// Nothing is sent until the first call.
-    pub fn new(
-        address: &str,
-        ee_from_tcp: Isometry3<f64>,
-        max_speed_mm_s: f64,
-        limits: CartesianLimits,
-    ) -> Self {
+    pub fn new(address: &str, ee_from_tcp: Isometry3<f64>, limits: CartesianLimits) -> Self {
         Self {
             address: address.to_owned(),
             ee_from_tcp,
-            max_speed_mm_s,
             limits,
             session: None,
         }
@@ -374,12 +367,6 @@ impl Arm for Panda {
         base_from_tcp: &Isometry3<f64>,
         speed_mm_s: f64,
     ) -> Result<(), DeviceError> {
-        if !(speed_mm_s > 0.0 && speed_mm_s <= self.max_speed_mm_s) {
-            return Err(self.refuse(format!(
-                "speed {speed_mm_s} mm/s is outside (0, {}] mm/s",
-                self.max_speed_mm_s
-            )));
-        }
         // The line is the TCP's; the controller takes the end effector's
         // pose.
         let (_, from_ee) = self.base_from_ee()?;

@@ -14,7 +14,6 @@ use crate::sim::world::{SharedWorld, lock};
 
 pub struct SimArm {
     world: SharedWorld,
-    max_speed_mm_s: f64,
     limits: CartesianLimits,
     repeatability_mm: f64,
     rng: ChaCha8Rng,
@@ -23,14 +22,12 @@ pub struct SimArm {
 impl SimArm {
     pub fn new(
         world: SharedWorld,
-        max_speed_mm_s: f64,
         limits: CartesianLimits,
         repeatability_mm: f64,
         rng: ChaCha8Rng,
     ) -> Self {
         Self {
             world,
-            max_speed_mm_s,
             limits,
             repeatability_mm,
             rng,
@@ -56,12 +53,6 @@ impl Arm for SimArm {
         base_from_tcp: &Isometry3<f64>,
         speed_mm_s: f64,
     ) -> Result<(), DeviceError> {
-        if !(speed_mm_s > 0.0 && speed_mm_s <= self.max_speed_mm_s) {
-            return Err(self.refuse(format!(
-                "speed {speed_mm_s} mm/s is outside (0, {}] mm/s",
-                self.max_speed_mm_s
-            )));
-        }
         // Drawn on every move, so that switching repeatability off leaves
         // every other draw of the stream where it was.
         let error = Vector3::from_fn(|_, _| self.rng.sample::<f64, _>(StandardNormal))
