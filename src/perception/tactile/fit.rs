@@ -226,6 +226,20 @@ impl FitConfig {
             })
         }
     }
+
+    /// The contact rule of every estimator: a map whose peak Δv is not
+    /// positive (a zero peak is no contact even with a zero threshold) or
+    /// is below the threshold holds no cable.
+    pub(crate) fn contact(&self, peak_dv_v: f64) -> Result<(), FitError> {
+        if peak_dv_v <= 0.0 || peak_dv_v < self.contact_threshold_v {
+            Err(FitError::NoContact {
+                peak_dv_v,
+                threshold_v: self.contact_threshold_v,
+            })
+        } else {
+            Ok(())
+        }
+    }
 }
 
 /// The wire parameters of one tactile map.
@@ -238,13 +252,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
 
     let weights = Weights::of(map);
     let peak_v = weights.peak_v;
-    // A zero peak is no contact even with a zero threshold.
-    if peak_v <= 0.0 || peak_v < contact_threshold_v {
-        return Err(FitError::NoContact {
-            peak_dv_v: peak_v,
-            threshold_v: contact_threshold_v,
-        });
-    }
+    config.contact(peak_v)?;
     let w = &weights.w;
     // At most 1, as the peak passed the threshold.
     let threshold = contact_threshold_v / peak_v;

@@ -151,12 +151,7 @@ pub fn fit_ridge(map: &TactileMap, config: &FitConfig) -> Result<RidgeFit, FitEr
         .copied()
         .filter(|dv| dv.is_finite())
         .fold(0.0, f64::max);
-    if peak_v <= 0.0 || peak_v < contact_threshold_v {
-        return Err(FitError::NoContact {
-            peak_dv_v: peak_v,
-            threshold_v: contact_threshold_v,
-        });
-    }
+    config.contact(peak_v)?;
     let samples = samples(map, peak_v);
     check_extent(map, contact_threshold_v / peak_v, peak_v)?;
 
