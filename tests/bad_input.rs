@@ -1,22 +1,13 @@
 //! Bad task and cell files give errors that name the file, line, column
 //! and field, and exit with status 2.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+use common::{cablecell, root};
 
 const BAD_INPUT: i32 = 2;
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cablecell runs")
-}
 
 /// The shipped regrasp task with `from` replaced by `to`, in a temp file.
 fn edited_task(dir: &tempfile::TempDir, from: &str, to: &str) -> PathBuf {

@@ -14,22 +14,14 @@ use cablecell::campaign::trial::TrialEntry;
 
 const CAMPAIGN: &str = "tasks/paper-regrasp-campaign.toml";
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn command(args: &[&str]) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
-    command.arg("campaign").args(args).current_dir(root());
+    let mut command = common::command();
+    command.arg("campaign").args(args);
     command
 }
 
 fn campaign(args: &[&str]) -> Output {
     command(args).output().expect("cablecell runs")
-}
-
-fn path_str(path: &Path) -> &str {
-    path.to_str().expect("utf-8 path")
 }
 
 /// The journal's entries, ordered, without the wall-clock time (the one
@@ -60,7 +52,7 @@ fn a_seed_gives_the_same_trials_on_one_thread_or_two() {
             "--seed",
             "5",
             "--out",
-            path_str(out),
+            common::text(out),
             "--threads",
             threads,
         ]);
@@ -95,7 +87,7 @@ fn a_killed_campaign_resumes_without_losing_or_repeating_a_trial() {
         "--seed",
         "9",
         "--out",
-        path_str(&out),
+        common::text(&out),
     ];
     let mut child = command(&args)
         .stdout(Stdio::null())
@@ -146,7 +138,7 @@ fn a_killed_campaign_resumes_without_losing_or_repeating_a_trial() {
         "--seed",
         "9",
         "--out",
-        path_str(&whole),
+        common::text(&whole),
     ];
     assert_eq!(campaign(&args).status.code(), Some(0));
     assert_eq!(after, entries(&whole));
@@ -163,7 +155,7 @@ fn an_existing_campaign_is_not_overwritten_and_a_seed_change_is_refused() {
         "--seed",
         "3",
         "--out",
-        path_str(&out),
+        common::text(&out),
     ];
     assert_eq!(campaign(&args).status.code(), Some(0));
     let again = campaign(&args);
@@ -176,7 +168,7 @@ fn an_existing_campaign_is_not_overwritten_and_a_seed_change_is_refused() {
         "--seed",
         "4",
         "--out",
-        path_str(&out),
+        common::text(&out),
         "--resume",
     ]);
     assert_eq!(other_seed.status.code(), Some(2));
@@ -198,7 +190,7 @@ fn the_json_summary_has_every_stage_and_rate() {
         "--trials",
         "8",
         "--out",
-        path_str(&dir.path().join("j")),
+        common::text(&dir.path().join("j")),
         "--json",
     ]);
     assert_eq!(out.status.code(), Some(0));
@@ -226,9 +218,9 @@ fn the_json_summary_has_every_stage_and_rate() {
 /// Writes the shipped campaign with `from` replaced by `to` into `dir`,
 /// its task and cell named by absolute paths, and returns its path.
 fn edited_campaign(dir: &Path, from: &str, to: &str) -> PathBuf {
-    let text = std::fs::read_to_string(root().join(CAMPAIGN)).expect("campaign");
+    let text = std::fs::read_to_string(common::root().join(CAMPAIGN)).expect("campaign");
     assert!(text.contains(from), "{from:?}");
-    let absolute = |relative: &str| format!("{:?}", root().join(relative));
+    let absolute = |relative: &str| format!("{:?}", common::root().join(relative));
     let text = text
         .replacen(from, to, 1)
         .replace("\"regrasp.toml\"", &absolute("tasks/regrasp.toml"))
@@ -244,7 +236,7 @@ fn edited_campaign(dir: &Path, from: &str, to: &str) -> PathBuf {
 fn refused(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = edited_campaign(dir.path(), from, to);
-    let out = campaign(&[path_str(&path)]);
+    let out = campaign(&[common::text(&path)]);
     assert_eq!(out.status.code(), Some(2));
     (String::from_utf8_lossy(&out.stderr).into_owned(), path, dir)
 }
@@ -295,11 +287,11 @@ fn a_trial_that_faults_is_recorded_and_the_campaign_goes_on() {
     let campaign = edited_campaign(dir.path(), "\"../config/cell.sim.toml\"", "\"cell.toml\"");
     let out = dir.path().join("out");
     let status = command(&[
-        path_str(&campaign),
+        common::text(&campaign),
         "--trials",
         "3",
         "--out",
-        path_str(&out),
+        common::text(&out),
     ])
     .output()
     .expect("runs");

@@ -2,15 +2,11 @@
 //! would try them: the emulator prints its port, the bring-up commands talk
 //! to it.
 
-use std::io::{BufRead, BufReader};
-use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
+mod common;
 
-fn cablecell() -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
-    command.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")));
-    command
-}
+use std::io::{BufRead, BufReader};
+
+use std::process::{Child, Output, Stdio};
 
 /// An emulator process and the port it serves; killed when dropped.
 struct Emulator {
@@ -20,7 +16,7 @@ struct Emulator {
 
 impl Emulator {
     fn start(device: &str) -> Self {
-        let mut child = cablecell()
+        let mut child = common::command()
             .args(["emulate", device])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -38,7 +34,7 @@ impl Emulator {
 
     fn device(&self, args: &[&str]) -> Output {
         let (kind, rest) = args.split_first().expect("device kind");
-        cablecell()
+        common::command()
             .args(["device", kind, "--port", &self.port])
             .args(rest)
             .output()
@@ -133,7 +129,7 @@ fn the_tactile_bring_up_commands_read_the_emulated_pad() {
 
 #[test]
 fn a_missing_port_is_named() {
-    let out = cablecell()
+    let out = common::command()
         .args(["device", "gripper", "--port", "/dev/no-such-port", "state"])
         .output()
         .expect("runs");

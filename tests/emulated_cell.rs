@@ -4,6 +4,8 @@
 //! taken through the state machine to its fault state, with the cell made
 //! safe and the record kept up to the fault.
 
+mod common;
+
 use std::path::Path;
 
 use cablecell::cell::Cell;
@@ -21,13 +23,9 @@ use cablecell::task::{TaskFile, load_task};
 
 const SEED: u64 = 3;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn shipped() -> (TaskFile, CellFile) {
-    let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");
-    let cell = load_cell(&root().join("config/cell.emulated.toml")).expect("cell");
+    let task = load_task(&common::root().join("tasks/regrasp.toml")).expect("task");
+    let cell = load_cell(&common::root().join("config/cell.emulated.toml")).expect("cell");
     (task, cell)
 }
 
@@ -193,7 +191,8 @@ fn a_device_error_frame_from_the_start_faults_before_the_arm_moves() {
 fn the_gripper_port_vanishing_set_in_the_cell_file_ends_the_task_in_its_fault_state() {
     // The cell file's own fault knob: the module vanishes after the two
     // requests of `prepare` (reference, open).
-    let text = std::fs::read_to_string(root().join("config/cell.emulated.toml")).expect("cell");
+    let text =
+        std::fs::read_to_string(common::root().join("config/cell.emulated.toml")).expect("cell");
     let text = text.replacen(
         "module_id = 12",
         "module_id = 12\nfault = { misbehaviour = \"vanish\", after_requests = 2 }",
@@ -203,7 +202,7 @@ fn the_gripper_port_vanishing_set_in_the_cell_file_ends_the_task_in_its_fault_st
     let path = dir.path().join("cell.toml");
     std::fs::write(&path, text).expect("write");
     let cell = load_cell(&path).expect("the fault knob parses");
-    let task = load_task(&root().join("tasks/regrasp.toml")).expect("task");
+    let task = load_task(&common::root().join("tasks/regrasp.toml")).expect("task");
     let (record, _) = run(&task, &cell, "", |_| {});
     let (state, device, error) = fault_of(&record);
     assert_eq!((state, device), ("trial_grasp", Some(DeviceKind::Gripper)));
@@ -281,7 +280,7 @@ fn a_wild_regrasp_correction_is_refused_by_the_workspace_box() {
 fn cablecell_run_on_the_emulated_cell_succeeds_and_a_device_fault_exits_with_3() {
     let run = |cell: &Path| {
         std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
-            .current_dir(root())
+            .current_dir(common::root())
             .args(["run", "tasks/regrasp.toml", "--seed", "3", "--cell"])
             .arg(cell)
             .output()
@@ -296,7 +295,8 @@ fn cablecell_run_on_the_emulated_cell_succeeds_and_a_device_fault_exits_with_3()
     );
     assert!(stdout.contains("success: within tolerance"), "{stdout}");
 
-    let text = std::fs::read_to_string(root().join("config/cell.emulated.toml")).expect("cell");
+    let text =
+        std::fs::read_to_string(common::root().join("config/cell.emulated.toml")).expect("cell");
     let text = text.replacen(
         "module_id = 12",
         "module_id = 12\nfault = { misbehaviour = { error_frame = 0xDA }, after_requests = 2 }",

@@ -3,7 +3,6 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::{Command, Output};
 
 mod common;
 
@@ -26,14 +25,6 @@ fn recorded_run(path: &Path, seed: u64) -> RunRecord {
     runner.run_to_end().unwrap();
     assert_eq!(runner.finish_recording().unwrap().as_deref(), Some(path));
     runner.into_record()
-}
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cablecell runs")
 }
 
 /// What the run record says each channel must hold.
@@ -132,7 +123,7 @@ fn a_truncated_recording_is_reported_and_what_it_holds_is_read() {
     let replay = Replay::of(&part).unwrap();
     assert!(!replay.transitions.is_empty());
 
-    let output = cablecell(&["replay", cut.to_str().unwrap()]);
+    let output = common::cablecell(&["replay", cut.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success(), "{stdout}");
     assert!(stdout.starts_with("truncated recording ("), "{stdout}");
@@ -166,7 +157,7 @@ fn replay_fits_the_recorded_frames_again() {
         .abs();
     assert!(moved > 1e-6, "ridge gave the centroids' answer");
 
-    let output = cablecell(&["replay", path.to_str().unwrap(), "--estimator", "ridge"]);
+    let output = common::cablecell(&["replay", path.to_str().unwrap(), "--estimator", "ridge"]);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success(), "{stdout}");
     assert!(stdout.contains("/tactile/raw 70"), "{stdout}");
@@ -181,7 +172,7 @@ fn replay_refuses_what_is_not_a_recording() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("not.mcap");
     std::fs::write(&path, "not an mcap file at all").unwrap();
-    let output = cablecell(&["replay", path.to_str().unwrap()]);
+    let output = common::cablecell(&["replay", path.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("not.mcap"), "{stderr}");
@@ -191,7 +182,7 @@ fn replay_refuses_what_is_not_a_recording() {
 fn the_run_command_records_where_it_is_told() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("deep/run.mcap");
-    let output = cablecell(&[
+    let output = common::cablecell(&[
         "run",
         "tasks/regrasp.toml",
         "--cell",
@@ -267,7 +258,7 @@ fn a_plan_changed_mid_run_is_recorded_with_the_grasps_it_judged() {
 fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("vision.mcap");
-    let output = cablecell(&[
+    let output = common::cablecell(&[
         "run",
         "tasks/regrasp.toml",
         "--seed",
@@ -287,7 +278,7 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     assert_eq!(images[0].format, "png");
     assert!(images[0].data.starts_with(b"\x89PNG"));
 
-    let output = cablecell(&[
+    let output = common::cablecell(&[
         "replay",
         path.to_str().unwrap(),
         "--vision",

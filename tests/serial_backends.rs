@@ -19,10 +19,6 @@ use cablecell::hw::{DeviceError, DeviceKind};
 use cablecell::perception::tactile::{RawFrame, TAXEL_COUNT};
 use serialport::TTYPort;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 /// An emulator serving a pseudo-terminal whose slave end stays open (so
 /// the master's reads keep working) for a driver to open by path.
 struct Served {
@@ -141,7 +137,7 @@ fn a_port_that_is_not_there_is_named_and_nothing_runs() {
         Ok(_) => panic!("a cell on a missing port"),
     }
     let out = Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .current_dir(root())
+        .current_dir(common::root())
         .args(["run", "tasks/regrasp.toml", "--cell"])
         .arg(&path)
         .output()
@@ -157,7 +153,8 @@ fn a_port_that_is_not_there_is_named_and_nothing_runs() {
 /// `cablecell check` on the emulated cell with `from` replaced by `to`:
 /// its error message, which must point at the last line of `to`.
 fn check_error(from: &str, to: &str) -> String {
-    let text = std::fs::read_to_string(root().join("config/cell.emulated.toml")).expect("cell");
+    let text =
+        std::fs::read_to_string(common::root().join("config/cell.emulated.toml")).expect("cell");
     assert!(text.contains(from), "{from}");
     let text = text.replacen(from, to, 1);
     let last = to.lines().last().unwrap_or(to);

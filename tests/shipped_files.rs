@@ -1,11 +1,11 @@
 //! Every task and cell file shipped in `tasks/` and `config/` is valid.
 
-use std::path::Path;
+mod common;
 
 use cablecell::task::{FileKind, check_file};
 
 fn toml_files(dir: &str) -> Vec<std::path::PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+    let dir = common::root().join(dir);
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|entry| entry.expect("directory entry").path())

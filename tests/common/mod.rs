@@ -16,13 +16,16 @@ pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The binary, to be run from the project's root.
+pub fn command() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
+    command.current_dir(root());
+    command
+}
+
 /// The binary run with `args` from the project's root, to its end.
 pub fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cablecell runs")
+    command().args(args).output().expect("cablecell runs")
 }
 
 /// The JSON the binary prints when run with `args`, which must succeed.
@@ -40,6 +43,27 @@ pub fn json_of(args: &[&str]) -> serde_json::Value {
 /// A path as the `&str` a command line takes.
 pub fn text(path: &Path) -> &str {
     path.to_str().expect("utf-8 path")
+}
+
+/// The development photographs (`../shared/data/cables-dev`, beside the
+/// checkout), or `None` after saying on standard error that `test` is
+/// skipped for want of them. With `CABLECELL_REQUIRE_DATA=1` (CI sets it)
+/// their absence fails the test instead.
+pub fn cables_dev(test: &str) -> Option<PathBuf> {
+    let dir = root().join("../shared/data/cables-dev");
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("CABLECELL_REQUIRE_DATA").is_none(),
+        "{test}: {} is missing",
+        dir.display()
+    );
+    eprintln!(
+        "SKIPPED {test}: it needs the photographs in {}",
+        dir.display()
+    );
+    None
 }
 
 /// The shipped simulated cell's text, its model path made absolute so that
