@@ -47,7 +47,7 @@ pub fn text(path: &Path) -> &str {
 
 /// The development photographs (`../shared/data/cables-dev`, beside the
 /// checkout), or `None` after saying on standard error that `test` is
-/// skipped for want of them. With `CABLECELL_REQUIRE_DATA=1` (CI sets it)
+/// skipped for want of them. With `CABLECELL_REQUIRE_DATA=1`
 /// their absence fails the test instead.
 pub fn cables_dev(test: &str) -> Option<PathBuf> {
     let dir = root().join("../shared/data/cables-dev");

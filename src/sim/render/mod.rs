@@ -14,26 +14,28 @@
 //! the caller's generator, so a seed fixes the image.
 
 mod background;
+mod dataset;
 pub mod fixtures;
+mod marker;
 mod random;
 mod tube;
+mod world_view;
 
-use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use marker::draw_marker;
 
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+use std::path::PathBuf;
+
 use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
-use opencv::core::{self, Mat, Point2f, Scalar, Size, Vec3f, Vector};
+use opencv::core::{self, Mat, Scalar, Size, Vec3f};
+use opencv::imgproc;
 use opencv::prelude::*;
-use opencv::{aruco, imgcodecs, imgproc};
-use rand::{Rng, RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::{Rng, RngExt};
 
+pub use dataset::{dataset_scene, write_dataset, write_scene_files};
 pub use random::{BackgroundChoice, SceneOptions, random_scene};
+pub use world_view::render_world;
 
-use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
 use crate::perception::vision::paths::polyline_length;
-use crate::sim::world::SimWorld;
 
 /// What the cables lie on. Apart from `Plain`, each kind draws its
 /// colours, scales and layout from the render's random generator, so one
@@ -220,17 +222,6 @@ fn cv(step: &'static str) -> impl FnOnce(opencv::Error) -> RenderError {
 /// Beyond this side an image is a mistake rather than a scene.
 const MAX_SIDE_PX: i32 = 16384;
 
-/// How light the marker's white and how dark its black, in gray levels:
-/// printed paper and toner, not ideal white and black.
-const MARKER_WHITE: f64 = 235.0;
-const MARKER_BLACK: f64 = 25.0;
-
-/// The marker is drawn at this many times the image's resolution and
-/// averaged down, as a sensor's pixels integrate light: its edges then sit
-/// where the geometry puts them to a hundredth of a pixel, which a pose
-/// from its corners needs.
-const MARKER_SUPERSAMPLING: i32 = 4;
-
 /// Draws `scene`, with its ground truth.
 pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, RenderError> {
     let (width, height) = (scene.width_px, scene.height_px);
@@ -331,183 +322,6 @@ fn unit(v: [f64; 3]) -> [f64; 3] {
     } else {
         v
     }
-}
-
-/// Warps the marker's image (with its white margin) onto `image` through
-/// the homography its corners fix, its edges blended by the warped
-/// coverage.
-fn draw_marker(image: &mut Mat, marker: &MarkerSpec) -> Result<(), RenderError> {
-    if !marker.corners_px.iter().flatten().all(|v| v.is_finite()) {
-        return Err(RenderError::BadMarker {
-            reason: "a corner is not finite",
-        });
-    }
-    let dictionary =
-        aruco::get_predefined_dictionary(marker.dictionary).map_err(cv("load the dictionary"))?;
-    // The data bits and a black border one bit wide.
-    let modules = dictionary.marker_size() + 2;
-    let side_px = (0..4)
-        .map(|i| {
-            let [a, b] = [marker.corners_px[i], marker.corners_px[(i + 1) % 4]];
-            (a[0] - b[0]).hypot(a[1] - b[1])
-        })
-        .fold(0.0, f64::max);
-    // Source pixels about as large as the supersampled image's, so that
-    // bilinear sampling neither aliases nor blurs the edges.
-    let module_px = ((f64::from(MARKER_SUPERSAMPLING) * side_px / f64::from(modules)).ceil()
-        as i32)
-        .clamp(2, 128);
-    let mut bits = Mat::default();
-    aruco::draw_marker(&dictionary, marker.id, modules * module_px, &mut bits, 1)
-        .map_err(cv("draw the marker"))?;
-    let mut plate = Mat::default();
-    core::copy_make_border(
-        &bits,
-        &mut plate,
-        module_px,
-        module_px,
-        module_px,
-        module_px,
-        core::BORDER_CONSTANT,
-        Scalar::all(255.0),
-    )
-    .map_err(cv("add the marker's margin"))?;
-    let mut plate_gray = Mat::default();
-    plate
-        .convert_to(
-            &mut plate_gray,
-            core::CV_32F,
-            (MARKER_WHITE - MARKER_BLACK) / 255.0,
-            MARKER_BLACK,
-        )
-        .map_err(cv("shade the marker"))?;
-
-    // Pixel centres are at integer coordinates, so the black square's
-    // edges lie half a pixel before its first and after its last pixel.
-    let lo = module_px as f32 - 0.5;
-    let hi = ((modules + 1) * module_px) as f32 - 0.5;
-    let source = [
-        Point2f::new(lo, lo),
-        Point2f::new(hi, lo),
-        Point2f::new(hi, hi),
-        Point2f::new(lo, hi),
-    ];
-    let target = marker
-        .corners_px
-        .map(|[x, y]| Point2f::new(x as f32, y as f32));
-    let homography = imgproc::get_perspective_transform_slice_def(source, target)
-        .map_err(cv("find the marker's homography"))?;
-    let image_from_plate = Matrix3::from_fn(|r, c| {
-        homography
-            .at_2d::<f64>(r as i32, c as i32)
-            .copied()
-            .unwrap_or(f64::NAN)
-    });
-
-    // The box of the image the plate covers, a pixel wider.
-    let plate_side = f64::from((modules + 2) * module_px) - 0.5;
-    let mut box_min = [f64::INFINITY; 2];
-    let mut box_max = [f64::NEG_INFINITY; 2];
-    for [x, y] in [
-        [-0.5, -0.5],
-        [plate_side, -0.5],
-        [plate_side, plate_side],
-        [-0.5, plate_side],
-    ] {
-        let p = image_from_plate * Vector3::new(x, y, 1.0);
-        if p.z.is_nan() || p.z <= 0.0 {
-            return Err(RenderError::BadMarker {
-                reason: "its corners do not make a marker seen from the front",
-            });
-        }
-        for axis in 0..2 {
-            box_min[axis] = box_min[axis].min(p[axis] / p.z);
-            box_max[axis] = box_max[axis].max(p[axis] / p.z);
-        }
-    }
-    let (width, height) = (image.cols(), image.rows());
-    let x0 = (box_min[0].floor() - 1.0).max(0.0);
-    let y0 = (box_min[1].floor() - 1.0).max(0.0);
-    let x1 = (box_max[0].ceil() + 1.0).min(f64::from(width - 1));
-    let y1 = (box_max[1].ceil() + 1.0).min(f64::from(height - 1));
-    if x0 > x1 || y0 > y1 {
-        return Ok(());
-    }
-    let (x0, y0) = (x0 as i32, y0 as i32);
-    let (box_width, box_height) = (x1 as i32 - x0 + 1, y1 as i32 - y0 + 1);
-
-    // Into the box at the supersampled resolution: image coordinate X falls
-    // at S (X − x0 + ½) − ½, so that averaging S × S blocks gives the
-    // box's pixels.
-    let s = f64::from(MARKER_SUPERSAMPLING);
-    let super_from_image = Matrix3::new(
-        s,
-        0.0,
-        s * (0.5 - f64::from(x0)) - 0.5,
-        0.0,
-        s,
-        s * (0.5 - f64::from(y0)) - 0.5,
-        0.0,
-        0.0,
-        1.0,
-    );
-    let super_from_plate = super_from_image * image_from_plate;
-    let rows: Vec<[f64; 3]> = (0..3)
-        .map(|r| [0, 1, 2].map(|c| super_from_plate[(r, c)]))
-        .collect();
-    let super_from_plate = Mat::from_slice_2d(&rows).map_err(cv("hold the homography"))?;
-    let super_size = Size::new(
-        box_width * MARKER_SUPERSAMPLING,
-        box_height * MARKER_SUPERSAMPLING,
-    );
-    let warp = |source: &Mat, step| -> Result<Mat, RenderError> {
-        let mut warped = Mat::default();
-        imgproc::warp_perspective(
-            source,
-            &mut warped,
-            &super_from_plate,
-            super_size,
-            imgproc::INTER_LINEAR,
-            core::BORDER_CONSTANT,
-            Scalar::all(0.0),
-        )
-        .map_err(cv(step))?;
-        let mut area = Mat::default();
-        imgproc::resize(
-            &warped,
-            &mut area,
-            Size::new(box_width, box_height),
-            0.0,
-            0.0,
-            imgproc::INTER_AREA,
-        )
-        .map_err(cv(step))?;
-        Ok(area)
-    };
-    // Outside the plate both warps read the zero border, so the warped
-    // gray is already weighted by the coverage.
-    let gray = warp(&plate_gray, "warp the marker")?;
-    let ones = Mat::new_rows_cols_with_default(plate.rows(), plate.cols(), core::CV_32F, 1.into())
-        .map_err(cv("allocate the marker's coverage"))?;
-    let coverage = warp(&ones, "warp the marker's coverage")?;
-    let gray = gray.data_typed::<f32>().map_err(cv("read the marker"))?;
-    let coverage = coverage
-        .data_typed::<f32>()
-        .map_err(cv("read the marker's coverage"))?;
-    let pixels = pixels_mut(image)?;
-    for by in 0..box_height {
-        for bx in 0..box_width {
-            let i = (by * box_width + bx) as usize;
-            let a = coverage[i];
-            if a > 0.0 {
-                let pixel = &mut pixels[((y0 + by) * width + x0 + bx) as usize];
-                for c in 0..3 {
-                    pixel[c] = pixel[c] * (1.0 - a) + gray[i];
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Multiplies the image by the light's gain and its gradient across the
@@ -614,200 +428,12 @@ fn clip_segment(a: [f64; 2], b: [f64; 2], max_x: f64, max_y: f64) -> Option<(f64
     (t0 <= t1).then_some((t0, t1))
 }
 
-/// The simulated camera's view of the simulated world: the cable (its
-/// sagging centre line from `sim::cable`, placed by the world, projected
-/// through `base_from_camera` and the intrinsics) drawn as a shaded tube of
-/// the cable's diameter in pixels at its mean depth over the background,
-/// and the finger's marker when it faces the camera. While the jaws hold
-/// the cable it is drawn where it lay when they closed.
-pub fn render_world(
-    world: &SimWorld,
-    camera: &CameraModel,
-    base_from_camera: &Isometry3<f64>,
-    marker: Option<&MarkerOnFinger>,
-    appearance: &Appearance,
-    rng: &mut impl Rng,
-) -> Result<RenderedScene, RenderError> {
-    let camera_from_base = base_from_camera.inverse();
-    let camera_from_cable = camera_from_base * world.base_from_cable;
-    let half_span_mm = world.cable.span_mm / 2.0;
-    let point_at = |u_mm: f64| {
-        let (height_mm, _) = world.cable.height_and_slope(u_mm);
-        camera_from_cable * Point3::new(u_mm, height_mm, 0.0)
-    };
-    // About one point per pixel along the cable's image.
-    let chord_px = match (
-        camera.project(&point_at(-half_span_mm)),
-        camera.project(&point_at(half_span_mm)),
-    ) {
-        (Some(a), Some(b)) => (a[0] - b[0]).hypot(a[1] - b[1]),
-        _ => 0.0,
-    };
-    let samples = (chord_px.ceil() as usize).clamp(64, 4096);
-    let in_camera: Vec<Point3<f64>> = (0..=samples)
-        .map(|i| point_at(-half_span_mm + 2.0 * half_span_mm * i as f64 / samples as f64))
-        .filter(|p| p.z > 0.0)
-        .collect();
-    let centerline_px: Vec<[f64; 2]> = in_camera.iter().filter_map(|p| camera.project(p)).collect();
-
-    let mut cables = Vec::new();
-    if centerline_px.len() >= 2 {
-        let mean_depth_mm = in_camera.iter().map(|p| p.z).sum::<f64>() / in_camera.len() as f64;
-        let focal_px = (camera.fx_px + camera.fy_px) / 2.0;
-        cables.push(CableSpec {
-            centerline_px,
-            diameter_px: focal_px * world.cable_diameter_mm / mean_depth_mm,
-            bgr: appearance.cable_bgr,
-            gloss: appearance.cable_gloss,
-        });
-    }
-
-    let marker = marker.and_then(|marker| {
-        let camera_from_marker = camera_from_base * world.base_from_tcp * marker.tcp_from_marker;
-        let normal = camera_from_marker.rotation * Vector3::z();
-        // Seen from behind, or edge on, the marker shows nothing.
-        if normal.dot(&-camera_from_marker.translation.vector) <= 0.0 {
-            return None;
-        }
-        let corners = marker.corners_in_marker();
-        let mut corners_px = [[0.0; 2]; 4];
-        for (corner_px, corner) in corners_px.iter_mut().zip(&corners) {
-            *corner_px = camera.project(&(camera_from_marker * corner))?;
-        }
-        Some(MarkerSpec {
-            dictionary: marker.dictionary,
-            id: marker.id,
-            corners_px,
-        })
-    });
-
-    render(
-        &SceneSpec {
-            width_px: camera.width_px,
-            height_px: camera.height_px,
-            background: appearance.background.clone(),
-            cables,
-            light: appearance.light,
-            noise_sigma: appearance.noise_sigma,
-            blur_sigma_px: appearance.blur_sigma_px,
-            marker,
-        },
-        rng,
-    )
-}
-
-/// JPEG quality of a data set's images: high enough to keep thin cables,
-/// low enough to leave the compression's artefacts a real camera's
-/// pipeline leaves.
-const JPEG_QUALITY: i32 = 92;
-
-/// Spacing of the points written to a data set's polylines, which hold
-/// spline control points in cables-dev rather than every pixel.
-const POLYLINE_SPACING_PX: f64 = 6.0;
-
-/// Writes `count` random scenes into `dir` in the cables-dev layout: per
-/// image `NNNNN.jpg`, `NNNNN_mask_K.png` (0/255, one per cable, K from 0),
-/// `NNNNN_mask_all.png` and `NNNNN.txt` (line K: `N x0 y0 x1 y1 ...`, the
-/// K-th cable's centre line, integer pixels as in cables-dev). Image i is
-/// drawn from stream i of a generator seeded with `seed`, so it does not
-/// depend on `count`.
-pub fn write_dataset(
-    dir: &Path,
-    count: usize,
-    seed: u64,
-    options: &SceneOptions,
-) -> Result<(), RenderError> {
-    std::fs::create_dir_all(dir).map_err(|source| RenderError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    for index in 0..count {
-        let rendered = dataset_scene(seed, index as u64, options)?;
-        write_scene_files(dir, &format!("{index:05}"), &rendered)?;
-    }
-    Ok(())
-}
-
-/// Image `index` of the data set [`write_dataset`] writes for `seed` and
-/// `options`, as rendered (before it is written as a JPEG).
-pub fn dataset_scene(
-    seed: u64,
-    index: u64,
-    options: &SceneOptions,
-) -> Result<RenderedScene, RenderError> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(index);
-    let scene = random_scene(&mut rng, options);
-    render(&scene, &mut rng)
-}
-
-/// Writes `rendered` into the existing folder `dir` as image `stem` of a
-/// data set in the cables-dev layout (see [`write_dataset`]).
-pub fn write_scene_files(
-    dir: &Path,
-    stem: &str,
-    rendered: &RenderedScene,
-) -> Result<(), RenderError> {
-    write_image(
-        &dir.join(format!("{stem}.jpg")),
-        &rendered.bgr,
-        &[imgcodecs::IMWRITE_JPEG_QUALITY, JPEG_QUALITY],
-    )?;
-    for (k, mask) in rendered.masks.iter().enumerate() {
-        write_image(&dir.join(format!("{stem}_mask_{k}.png")), mask, &[])?;
-    }
-    write_image(
-        &dir.join(format!("{stem}_mask_all.png")),
-        &rendered.union_mask,
-        &[],
-    )?;
-    let mut text = String::new();
-    for centerline in &rendered.centerlines_px {
-        let points = resample(centerline, POLYLINE_SPACING_PX);
-        let _ = write!(text, "{}", points.len());
-        for [x, y] in points {
-            let _ = write!(text, " {} {}", x.round(), y.round());
-        }
-        text.push('\n');
-    }
-    let path = dir.join(format!("{stem}.txt"));
-    std::fs::write(&path, text).map_err(|source| RenderError::Io { path, source })
-}
-
-fn write_image(path: &Path, image: &Mat, params: &[i32]) -> Result<(), RenderError> {
-    let params: Vector<i32> = params.iter().copied().collect();
-    let written = imgcodecs::imwrite(path, image, &params).map_err(cv("encode an image"))?;
-    if written {
-        Ok(())
-    } else {
-        Err(RenderError::WriteImage {
-            path: path.to_path_buf(),
-        })
-    }
-}
-
-/// Points along `points` about `spacing_px` apart, keeping both ends.
-fn resample(points: &[[f64; 2]], spacing_px: f64) -> Vec<[f64; 2]> {
-    let mut out = Vec::new();
-    let mut since_kept = 0.0;
-    for (i, point) in points.iter().enumerate() {
-        if i > 0 {
-            since_kept += (point[0] - points[i - 1][0]).hypot(point[1] - points[i - 1][1]);
-        }
-        if i == 0 || since_kept >= spacing_px {
-            out.push(*point);
-            since_kept = 0.0;
-        }
-    }
-    match (points.last(), out.last()) {
-        (Some(last), Some(kept)) if last != kept => out.push(*last),
-        _ => {}
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::dataset::resample;
     use super::*;
 
     #[test]
