@@ -101,7 +101,7 @@ impl<'de> Deserialize<'de> for PandaNotBuilt {
     fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
         Err(serde::de::Error::custom(
             "this cablecell was built without the Panda driver: build it with \
-             `cargo build --release --features panda` (see the README, Bringing up devices)",
+             `cargo build --release --features panda` (see docs/devices.md, The Panda)",
         ))
     }
 }

@@ -1,6 +1,6 @@
 //! The Schunk Motion Protocol (SMP), as the PG70 speaks it over RS-232:
 //! frames, their CRC, the requests a grasp needs and the replies and
-//! spontaneous messages the module sends (`../shared/protocols.md`).
+//! spontaneous messages the module sends (docs/protocols.md).
 //!
 //! Frame: `[group] [module id] [D-Len] [command] [data …] [CRC lo] [CRC hi]`,
 //! D-Len counting the command and data bytes, the CRC-16/ARC over every

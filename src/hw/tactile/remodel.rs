@@ -1,5 +1,5 @@
 //! The REMODEL 5×5 tactile finger's microcontroller over serial
-//! (`protocols.md`): single-byte requests, fixed-length answers with no
+//! (docs/protocols.md): single-byte requests, fixed-length answers with no
 //! framing or checksum, 12-bit samples.
 //!
 //! Because nothing frames an answer, every request starts from an empty
