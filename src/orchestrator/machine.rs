@@ -26,29 +26,34 @@ use crate::hw::tactile::TactileFrame;
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
 use crate::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
 
-/// What the machine shares with the runner.
+/// What the machine shares with the runner: lent to the machine for each
+/// event, owned by the runner in between, so that the runner can change
+/// the plan between two events (the REPL's `set`).
 #[derive(Debug)]
 pub struct Context {
     /// The cell's clock when the event being handled arrived.
     pub now_s: f64,
     /// What the cell must do next, left by the latest entry action.
     pub command: Option<Command>,
+    /// What the task asks for; read by every entry action and judgement,
+    /// so a change applies from the next command on.
+    pub plan: Plan,
     pub record: RunRecord,
 }
 
 impl Context {
-    pub fn new(record: RunRecord) -> Self {
+    pub fn new(plan: Plan, record: RunRecord) -> Self {
         Self {
             now_s: 0.0,
             command: None,
+            plan,
             record,
         }
     }
 }
 
-/// The machine's own storage: the plan and what it learnt on the way.
+/// The machine's own storage: what it learnt on the way.
 pub struct GraspTask {
-    plan: Plan,
     /// Per-taxel rest voltages, measured in `prepare`.
     bias: Option<Bias>,
     /// Where the next grasp puts the TCP.
@@ -59,20 +64,19 @@ pub struct GraspTask {
 }
 
 impl GraspTask {
-    pub fn new(plan: Plan) -> Self {
+    pub fn new() -> Self {
         Self {
-            plan,
             bias: None,
             base_from_tcp_aim: Isometry3::identity(),
             base_from_tcp_grasped: Isometry3::identity(),
             regrasps_done: 0,
         }
     }
+}
 
-    /// Replaces the plan between two events (the REPL's `set`): what the
-    /// run learnt stays; the next entry action and judgement use it.
-    pub(super) fn set_plan(&mut self, plan: Plan) {
-        self.plan = plan;
+impl Default for GraspTask {
+    fn default() -> Self {
+        Self::new()
     }
 }
 
@@ -97,21 +101,17 @@ impl GraspTask {
     fn prepare(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
             Event::Tactile { frames, .. } => {
-                let mut estimator = BiasEstimator::new(self.plan.bias_frames);
+                let mut estimator = BiasEstimator::new(context.plan.bias_frames);
                 match frames.iter().find_map(|frame| estimator.push(&frame.raw)) {
                     Some(bias) => {
                         self.bias = Some(bias);
                         Transition(State::detect())
                     }
-                    None => fault(
-                        context,
-                        None,
-                        format!(
-                            "{} bias frames read, {} needed",
-                            frames.len(),
-                            self.plan.bias_frames
-                        ),
-                    ),
+                    None => {
+                        let needed = context.plan.bias_frames;
+                        let error = format!("{} bias frames read, {needed} needed", frames.len());
+                        fault(context, None, error)
+                    }
                 }
             }
             _ => Super,
@@ -125,10 +125,11 @@ impl GraspTask {
             Event::Detected(detections) => match detections.cables.first() {
                 Some(detection) => {
                     // Aim so that the cable lands on the target pose.
-                    let sensor_from_cable = planar_to_spatial(&self.plan.target.sensor_from_line());
+                    let sensor_from_cable =
+                        planar_to_spatial(&context.plan.target.sensor_from_line());
                     self.base_from_tcp_aim = detection.base_from_cable
                         * sensor_from_cable.inverse()
-                        * self.plan.tcp_from_sensor.inverse();
+                        * context.plan.tcp_from_sensor.inverse();
                     Transition(State::approach())
                 }
                 None => fail(context, Failure::NothingDetected),
@@ -224,8 +225,8 @@ impl GraspTask {
     #[action]
     fn enter_prepare(&mut self, context: &mut Context) {
         context.command = Some(Command::Prepare {
-            open_mm: self.plan.open_mm,
-            bias_frames: self.plan.bias_frames,
+            open_mm: context.plan.open_mm,
+            bias_frames: context.plan.bias_frames,
         });
     }
 
@@ -237,8 +238,8 @@ impl GraspTask {
     #[action]
     fn enter_approach(&mut self, context: &mut Context) {
         context.command = Some(Command::MoveTo {
-            base_from_tcp: self.standoff_from(&self.base_from_tcp_aim),
-            speed_mm_s: self.plan.speed_mm_s,
+            base_from_tcp: standoff_from(&self.base_from_tcp_aim, context.plan.standoff_mm),
+            speed_mm_s: context.plan.speed_mm_s,
         });
     }
 
@@ -246,15 +247,15 @@ impl GraspTask {
     fn enter_trial_grasp(&mut self, context: &mut Context) {
         context.command = Some(Command::Grasp {
             base_from_tcp: self.base_from_tcp_aim,
-            speed_mm_s: self.plan.speed_mm_s,
-            grip_current_a: self.plan.grip_current_a,
+            speed_mm_s: context.plan.speed_mm_s,
+            grip_current_a: context.plan.grip_current_a,
         });
     }
 
     #[action]
     fn enter_read_tactile(&mut self, context: &mut Context) {
         context.command = Some(Command::ReadTactile {
-            frames: self.plan.average_frames,
+            frames: context.plan.average_frames,
         });
     }
 
@@ -263,28 +264,28 @@ impl GraspTask {
         self.regrasps_done += 1;
         context.command = Some(Command::Regrasp {
             base_from_tcp: self.base_from_tcp_aim,
-            speed_mm_s: self.plan.speed_mm_s,
-            open_mm: self.plan.open_mm,
-            retreat_mm: self.plan.retreat_mm,
-            grip_current_a: self.plan.grip_current_a,
+            speed_mm_s: context.plan.speed_mm_s,
+            open_mm: context.plan.open_mm,
+            retreat_mm: context.plan.retreat_mm,
+            grip_current_a: context.plan.grip_current_a,
         });
     }
 
     #[action]
     fn enter_fault(&mut self, context: &mut Context) {
         context.command = Some(Command::SafeStop {
-            open_mm: self.plan.open_mm,
+            open_mm: context.plan.open_mm,
         });
     }
 }
 
-impl GraspTask {
-    /// The pose `standoff_mm` back from `base_from_tcp` along the approach
-    /// axis (the TCP's z).
-    fn standoff_from(&self, base_from_tcp: &Isometry3<f64>) -> Isometry3<f64> {
-        base_from_tcp * Translation3::new(0.0, 0.0, -self.plan.standoff_mm)
-    }
+/// The pose `standoff_mm` back from `base_from_tcp` along the approach
+/// axis (the TCP's z).
+fn standoff_from(base_from_tcp: &Isometry3<f64>, standoff_mm: f64) -> Isometry3<f64> {
+    base_from_tcp * Translation3::new(0.0, 0.0, -standoff_mm)
+}
 
+impl GraspTask {
     fn on_grasped(
         &mut self,
         context: &mut Context,
@@ -319,14 +320,12 @@ impl GraspTask {
         let Some(map) = self.bias.as_ref().and_then(|bias| bias.remove_mean(&raw)) else {
             return fault(context, None, "no tactile frames to evaluate".into());
         };
-        let fit = self
-            .plan
-            .estimator
-            .estimate(&map, &self.plan.fit, true_line);
+        let plan = &context.plan;
+        let fit = plan.estimator.estimate(&map, &plan.fit, true_line);
         let estimated_error = fit
             .as_ref()
             .ok()
-            .map(|fit| fit.line().error_to(&self.plan.target));
+            .map(|fit| fit.line().error_to(&context.plan.target));
         context.record.grasps.push(GraspRecord {
             attempt,
             t_s: context.now_s,
@@ -336,7 +335,7 @@ impl GraspTask {
             estimated_error,
             truth: true_line.map(|line| Truth {
                 line,
-                error: line.error_to(&self.plan.target),
+                error: line.error_to(&context.plan.target),
                 estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
             }),
         });
@@ -351,17 +350,17 @@ impl GraspTask {
             }
         };
         let line = fit.line();
-        let error = line.error_to(&self.plan.target);
-        if error.within(&self.plan.tolerance) {
+        let error = line.error_to(&context.plan.target);
+        if error.within(&context.plan.tolerance) {
             context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
             Transition(State::done())
-        } else if attempt < self.plan.max_regrasps {
+        } else if attempt < context.plan.max_regrasps {
             let sensor_old_from_new =
-                t_corr_with_gain(&line, &self.plan.target, &self.plan.correction_gain);
+                t_corr_with_gain(&line, &context.plan.target, &context.plan.correction_gain);
             self.base_from_tcp_aim = self.base_from_tcp_grasped
-                * self.plan.tcp_from_sensor
+                * context.plan.tcp_from_sensor
                 * sensor_old_from_new
-                * self.plan.tcp_from_sensor.inverse();
+                * context.plan.tcp_from_sensor.inverse();
             Transition(State::regrasp())
         } else {
             fail(
@@ -500,8 +499,8 @@ mod tests {
         fn with_estimator(max_regrasps: u32, estimator: Estimator) -> Self {
             let plan = plan(max_regrasps, estimator);
             let record = RunRecord::new("t", "c", 0, plan.target, plan.tolerance);
-            let mut context = Context::new(record);
-            let machine = GraspTask::new(plan)
+            let mut context = Context::new(plan, record);
+            let machine = GraspTask::new()
                 .uninitialized_state_machine()
                 .init_with_context(&mut context);
             let noiseless = SimTactileConfig {
