@@ -165,7 +165,7 @@ pub fn repl(
             Some(loaded) => format!(
                 "{}:{}> ",
                 loaded.params.task().task.name,
-                loaded.driver.runner.state().name()
+                loaded.driver.runner().state().name()
             ),
             None => "cablecell> ".to_owned(),
         };
@@ -236,13 +236,10 @@ impl Session {
         let runner = self
             .new_runner(&params, seed)
             .map_err(|error| format!("the cell cannot start: {error}"))?;
-        let mut driver = Driver::new(runner);
-        driver.breakpoints = breakpoints;
-        driver.pace = self.pace;
         self.task = Some(Loaded {
             params,
             seed,
-            driver,
+            driver: Driver::new(runner, breakpoints, self.pace),
             commentary: Commentary::default(),
         });
         Ok(())
@@ -261,9 +258,9 @@ impl Session {
 
     /// Finishes the current run's recording; returns its breakpoints.
     fn end_run(&mut self) -> Option<cablecell::orchestrator::breakpoint::Breakpoints> {
-        let mut loaded = self.task.take()?;
-        finish_recording(&mut loaded.driver.runner);
-        Some(loaded.driver.breakpoints)
+        let (mut runner, breakpoints) = self.task.take()?.driver.into_parts();
+        finish_recording(&mut runner);
+        Some(breakpoints)
     }
 
     fn loaded(&mut self) -> Result<&mut Loaded, String> {
@@ -325,10 +322,10 @@ impl Session {
             "breaks" => {
                 no_args(&args)?;
                 let loaded = self.loaded()?;
-                if loaded.driver.breakpoints.iter().next().is_none() {
+                if loaded.driver.breakpoints().iter().next().is_none() {
                     println!("no breakpoints");
                 }
-                for breakpoint in loaded.driver.breakpoints.iter() {
+                for breakpoint in loaded.driver.breakpoints().iter() {
                     println!("{breakpoint}");
                 }
             }
@@ -337,7 +334,7 @@ impl Session {
                     let id: usize = id
                         .parse()
                         .map_err(|_| format!("`{id}` is not a breakpoint number"))?;
-                    if !self.loaded()?.driver.breakpoints.delete(id) {
+                    if !self.loaded()?.driver.breakpoints_mut().delete(id) {
                         return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
                     }
                     println!("deleted breakpoint {id}");
@@ -369,7 +366,6 @@ impl Session {
                         .map_err(|e| e.to_string())?;
                     let recorded = loaded
                         .driver
-                        .runner
                         .set_plan(Plan::new(loaded.params.task(), &cell));
                     println!("{param} = {value} (from the next command on)");
                     if let Err(error) = recorded {
@@ -380,7 +376,7 @@ impl Session {
             },
             "values" => {
                 no_args(&args)?;
-                let values = RunValues::of(self.loaded()?.driver.runner.record());
+                let values = RunValues::of(self.loaded()?.driver.runner().record());
                 for name in RunValues::NAMES {
                     let value = values
                         .get(name)
@@ -404,7 +400,7 @@ impl Session {
         let loaded = self.loaded()?;
         let id = loaded
             .driver
-            .breakpoints
+            .breakpoints_mut()
             .add(state, condition.as_deref())
             .map_err(|e| e.to_string())?;
         match condition {
@@ -417,10 +413,10 @@ impl Session {
     fn advance(&mut self, mode: Mode) -> Result<(), String> {
         let pause = self.pause.clone();
         let loaded = self.loaded()?;
-        if run_over(&loaded.driver.runner) {
+        if run_over(loaded.driver.runner()) {
             return Err(format!(
                 "the run is over ({}): `reset` starts it again",
-                loaded.driver.runner.state().name()
+                loaded.driver.runner().state().name()
             ));
         }
         // A Ctrl-C pressed while nothing ran is not a request to pause this.
@@ -430,15 +426,15 @@ impl Session {
             .driver
             .advance(mode, &pause, |runner| commentary.print_new(runner.record()));
         let stop = stop.map_err(|e| format!("{e}; the run goes on unrecorded"))?;
-        let record = loaded.driver.runner.record();
-        let runner = &loaded.driver.runner;
+        let runner = loaded.driver.runner();
+        let record = runner.record();
         match stop {
             Stop::Transition { to, .. } if !run_over(runner) => {
                 println!("in {to}{}", next_command(runner));
             }
             Stop::Transition { .. } | Stop::Finished { .. } => {}
             Stop::Breakpoint { id, state } => {
-                let breakpoint = loaded.driver.breakpoints.iter().find(|b| b.id == id);
+                let breakpoint = loaded.driver.breakpoints().iter().find(|b| b.id == id);
                 let condition = breakpoint
                     .and_then(|b| b.condition.as_ref())
                     .map(|c| format!(" (if {})", c.text()))
@@ -458,31 +454,16 @@ impl Session {
     }
 
     fn abort(&mut self) -> Result<(), String> {
-        let pause = self.pause.clone();
         let loaded = self.loaded()?;
-        match loaded.driver.runner.abort() {
-            Ok(true) => {}
-            Ok(false) if loaded.driver.runner.state().is_final() => {
-                return Err(format!(
-                    "the run is over ({})",
-                    loaded.driver.runner.state().name()
-                ));
-            }
-            Ok(false) => return Err("the run has not started: nothing to abort".into()),
-            Err(error) => println!("warning: {error}; the run goes on unrecorded"),
-        }
-        // Carry out the safe stop now, whatever the breakpoints say.
-        let breakpoints = std::mem::take(&mut loaded.driver.breakpoints);
-        pause.store(false, Ordering::SeqCst);
         let commentary = &mut loaded.commentary;
-        let result = loaded.driver.advance(Mode::Continue, &pause, |runner| {
-            commentary.print_new(runner.record())
-        });
-        loaded.driver.breakpoints = breakpoints;
-        if let Err(error) = result {
+        let recording_error = loaded
+            .driver
+            .abort(|runner| commentary.print_new(runner.record()))
+            .map_err(|nothing| nothing.to_string())?;
+        if let Some(error) = recording_error {
             println!("warning: {error}; the run goes on unrecorded");
         }
-        print_outcome(loaded.driver.runner.record());
+        print_outcome(loaded.driver.runner().record());
         Ok(())
     }
 }
@@ -538,7 +519,7 @@ fn print_help() {
 }
 
 fn show_state(loaded: &Loaded) {
-    let runner = &loaded.driver.runner;
+    let runner = loaded.driver.runner();
     let record = runner.record();
     println!(
         "state {} at {:.3} s{}",
@@ -566,12 +547,12 @@ fn show_state(loaded: &Loaded) {
 }
 
 fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
-    let runner = &mut loaded.driver.runner;
-    let base_from_tcp = runner
+    let base_from_tcp = loaded
+        .driver
         .base_from_tcp()
         .map_err(|e| format!("the arm did not answer: {e}"))?;
     println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
-    if let Some(grasp) = runner.record().grasps.last() {
+    if let Some(grasp) = loaded.driver.runner().record().grasps.last() {
         println!(
             "at the latest grasp ({}): {}",
             attempt_name(grasp.attempt),
@@ -608,12 +589,12 @@ const CELL_ROWS: usize = 4;
 const SHADES: [char; 5] = [' ', '░', '▒', '▓', '█'];
 
 fn show_tactile(loaded: &Loaded) -> Result<(), String> {
-    let record = loaded.driver.runner.record();
+    let record = loaded.driver.runner().record();
     let grasp = record
         .grasps
         .last()
         .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
-    let pitch_mm = loaded.driver.runner.plan().fit.pitch_mm;
+    let pitch_mm = loaded.driver.runner().plan().fit.pitch_mm;
     let line = grasp.fit.as_ref().map(Estimate::line);
     let centroids: Vec<(f64, f64)> = match &grasp.fit {
         Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
