@@ -208,6 +208,7 @@ impl Driver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::orchestrator::State;
     use crate::task::load_task;
 
     fn driver(seed: u64) -> Driver {
@@ -230,7 +231,7 @@ mod tests {
             match stepped.advance(Mode::Step, &no_pause, |_| {}).unwrap() {
                 Stop::Transition { to, .. } => stops.push(to),
                 Stop::Finished { state } => {
-                    assert_eq!(state, "done");
+                    assert_eq!(state, State::Done {}.name());
                     break;
                 }
                 other => panic!("{other:?}"),
@@ -241,7 +242,9 @@ mod tests {
             continued
                 .advance(Mode::Continue, &no_pause, |_| {})
                 .unwrap(),
-            Stop::Finished { state: "done" }
+            Stop::Finished {
+                state: State::Done {}.name()
+            }
         );
         let states: Vec<_> = continued
             .runner
@@ -251,22 +254,21 @@ mod tests {
             .map(|t| t.to)
             .collect();
         assert_eq!(stops, states);
-        assert_eq!(stops.first(), Some(&"prepare"));
+        assert_eq!(stops.first(), Some(&State::Prepare {}.name()));
     }
 
     #[test]
     fn a_breakpoint_stops_before_its_state_runs_and_a_pause_is_taken() {
         let no_pause = AtomicBool::new(false);
         let mut d = driver(3);
-        d.breakpoints.add("trial_grasp", None).unwrap();
-        d.breakpoints
-            .add("regrasp", Some("abs(n_mm) > 100"))
-            .unwrap();
+        let (trial_grasp, regrasp) = (State::TrialGrasp {}.name(), State::Regrasp {}.name());
+        d.breakpoints.add(trial_grasp, None).unwrap();
+        d.breakpoints.add(regrasp, Some("abs(n_mm) > 100")).unwrap();
         assert_eq!(
             d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
             Stop::Breakpoint {
                 id: 1,
-                state: "trial_grasp"
+                state: trial_grasp
             }
         );
         // Nothing grasped yet: the grasp command waits.
@@ -275,12 +277,16 @@ mod tests {
         let pause = AtomicBool::new(true);
         assert_eq!(
             d.advance(Mode::Continue, &pause, |_| {}).unwrap(),
-            Stop::Paused { state: "evaluate" }
+            Stop::Paused {
+                state: State::Evaluate {}.name()
+            }
         );
         assert!(!pause.load(Ordering::SeqCst), "the request is taken");
         assert_eq!(
             d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
-            Stop::Finished { state: "done" }
+            Stop::Finished {
+                state: State::Done {}.name()
+            }
         );
     }
 }

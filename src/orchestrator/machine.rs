@@ -82,8 +82,8 @@ impl Default for GraspTask {
 
 #[state_machine(
     initial = "State::idle()",
-    state(derive(Debug, Clone, PartialEq, Eq)),
-    superstate(derive(Debug)),
+    state(derive(Debug, Clone, Copy, PartialEq, Eq)),
+    superstate(derive(Debug, Clone, Copy, PartialEq, Eq)),
     after_transition = "Self::after_transition"
 )]
 impl GraspTask {
@@ -382,37 +382,71 @@ impl GraspTask {
     }
 }
 
-impl State {
-    /// Every state's name, in the order of the sequence.
-    pub const NAMES: [&'static str; 11] = [
-        "idle",
-        "prepare",
-        "detect",
-        "approach",
-        "trial_grasp",
-        "evaluate",
-        "regrasp",
-        "verify",
-        "done",
-        "failed",
-        "fault",
-    ];
+/// The one table of names: each state's variant beside its handler, whose
+/// name is the state's name in records, reports, breakpoints and the graph,
+/// in the order of the sequence. `name`'s match is exhaustive, so a state
+/// the machine gains does not compile until it is named here; a test checks
+/// that each variant sits beside its own handler.
+macro_rules! names {
+    (
+        states: $($variant:ident: $handler:ident),+;
+        superstates: $($super_variant:ident: $super_handler:ident),+;
+    ) => {
+        impl State {
+            /// Every state's name, in the order of the sequence.
+            pub const NAMES: [&'static str; [$(stringify!($handler)),+].len()] =
+                [$(stringify!($handler)),+];
 
-    /// The state's name as records and reports spell it.
-    pub fn name(&self) -> &'static str {
-        match self {
-            State::Idle { .. } => "idle",
-            State::Prepare { .. } => "prepare",
-            State::Detect { .. } => "detect",
-            State::Approach { .. } => "approach",
-            State::TrialGrasp { .. } => "trial_grasp",
-            State::Evaluate { .. } => "evaluate",
-            State::Regrasp { .. } => "regrasp",
-            State::Verify { .. } => "verify",
-            State::Done { .. } => "done",
-            State::Failed { .. } => "failed",
-            State::Fault { .. } => "fault",
+            /// Every state, in the order of the sequence.
+            pub fn all() -> [State; Self::NAMES.len()] {
+                [$(State::$handler()),+]
+            }
+
+            /// The state's name, as records and reports spell it.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(State::$variant { .. } => stringify!($handler),)+
+                }
+            }
         }
+
+        impl Superstate {
+            /// The superstate's name, as the graph spells it.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(Superstate::$super_variant { .. } => stringify!($super_handler),)+
+                }
+            }
+        }
+    };
+}
+
+names! {
+    states:
+        Idle: idle,
+        Prepare: prepare,
+        Detect: detect,
+        Approach: approach,
+        TrialGrasp: trial_grasp,
+        Evaluate: evaluate,
+        Regrasp: regrasp,
+        Verify: verify,
+        Done: done,
+        Failed: failed,
+        Fault: fault;
+    superstates:
+        Grasping: grasping;
+}
+
+impl State {
+    /// The state called `name`, if there is one.
+    pub fn named(name: &str) -> Option<State> {
+        Self::all().into_iter().find(|state| state.name() == name)
+    }
+
+    /// The superstate that holds this state, if any.
+    pub fn parent(&self) -> Option<Superstate> {
+        statig::blocking::State::<GraspTask>::superstate(&mut self.clone())
     }
 
     /// Whether the run is over in this state.
@@ -534,8 +568,8 @@ mod tests {
             }
         }
 
-        fn state(&self) -> &'static str {
-            self.machine.state().name()
+        fn state(&self) -> State {
+            *self.machine.state()
         }
 
         /// Start, bias, a detected cable at the origin, arrival.
@@ -569,6 +603,26 @@ mod tests {
     }
 
     #[test]
+    fn each_state_is_named_after_its_handler_once() {
+        // `all` makes each state with its handler's constructor and
+        // `NAMES` holds the handlers' names: each must be the name of the
+        // variant the constructor makes.
+        let names = State::all().map(|state| state.name());
+        assert_eq!(names, State::NAMES);
+        let unique: std::collections::BTreeSet<_> = names.iter().collect();
+        assert_eq!(unique.len(), names.len());
+        for state in State::all() {
+            assert_eq!(State::named(state.name()), Some(state));
+        }
+        assert_eq!(State::named("trial grasp"), None);
+        assert_eq!(
+            State::prepare().parent().map(|s| s.name()),
+            Some("grasping")
+        );
+        assert_eq!(State::idle().parent(), None);
+    }
+
+    #[test]
     fn the_trial_grasp_aims_the_pad_at_the_detected_cable() {
         let mut h = Harness::new(1);
         let Command::Grasp { base_from_tcp, .. } = h.up_to_trial_grasp() else {
@@ -578,7 +632,7 @@ mod tests {
         let base_from_sensor = base_from_tcp * plan(1, Estimator::Centroids).tcp_from_sensor;
         assert!((base_from_sensor.translation.vector).norm() < 1e-9);
         assert!(base_from_sensor.rotation.angle() < 1e-9);
-        assert_eq!(h.state(), "trial_grasp");
+        assert_eq!(h.state(), State::trial_grasp());
     }
 
     #[test]
@@ -591,7 +645,7 @@ mod tests {
         ));
         let on_target = h.frames(4, Some(LineInSensor::new(0.0, 0.1)));
         assert_eq!(h.feed(on_target), None);
-        assert_eq!(h.state(), "done");
+        assert_eq!(h.state(), State::done());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Success { regrasps: 0 })
@@ -610,7 +664,7 @@ mod tests {
         h.grasped_at(grasped);
         let truth = LineInSensor::new(0.15, -2.0);
         let Some(Command::Regrasp { base_from_tcp, .. }) = h.feed(h.frames(4, Some(truth))) else {
-            panic!("expected a regrasp in {}", h.state());
+            panic!("expected a regrasp in {:?}", h.state());
         };
         // Where the true cable lies in the new pad frame: near the target.
         let tcp_from_sensor = plan(1, Estimator::Oracle).tcp_from_sensor;
@@ -630,7 +684,7 @@ mod tests {
             error.n_mm.abs() < 0.2 && error.alpha_rad.abs() < 0.02,
             "{error:?}"
         );
-        assert_eq!(h.state(), "regrasp");
+        assert_eq!(h.state(), State::regrasp());
     }
 
     #[test]
@@ -644,9 +698,9 @@ mod tests {
             h.grasped_at(Isometry3::identity()),
             Some(Command::ReadTactile { .. })
         ));
-        assert_eq!(h.state(), "verify");
+        assert_eq!(h.state(), State::verify());
         assert_eq!(h.feed(off), None);
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         match &h.context.record.outcome {
             Some(RunOutcome::Failed {
                 reason: Failure::ToleranceNotReached { regrasps: 1, error },
@@ -663,7 +717,7 @@ mod tests {
         h.grasped_at(Isometry3::identity());
         let empty = h.frames(4, None);
         h.feed(empty);
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -680,7 +734,7 @@ mod tests {
             base_from_tcp: Isometry3::identity(),
             grip: GripOutcome::Empty,
         });
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
 
         let mut h = Harness::new(1);
         h.feed(Event::Start);
@@ -689,7 +743,7 @@ mod tests {
             cables: Vec::new(),
             image: None,
         }));
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -709,7 +763,7 @@ mod tests {
             }],
             image: None,
         }));
-        assert_eq!(h.state(), "approach");
+        assert_eq!(h.state(), State::approach());
         let error = DeviceError::Timeout {
             device: DeviceKind::Arm,
             waited_ms: 500,
@@ -718,10 +772,10 @@ mod tests {
             h.feed(Event::DeviceFault(error)),
             Some(Command::SafeStop { open_mm: 20.0 })
         );
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
         match &h.context.record.outcome {
             Some(RunOutcome::Fault { state, device, .. }) => {
-                assert_eq!(*state, "approach");
+                assert_eq!(*state, State::approach().name());
                 assert_eq!(*device, Some(DeviceKind::Arm));
             }
             other => panic!("{other:?}"),
@@ -738,7 +792,7 @@ mod tests {
             None
         );
         assert_eq!(h.context.record.safe_stop_problems.len(), 1);
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
     }
 
     #[test]
@@ -746,23 +800,21 @@ mod tests {
         let mut h = Harness::new(1);
         h.up_to_trial_grasp();
         h.grasped_at(Isometry3::identity());
-        assert_eq!(h.state(), "evaluate");
+        assert_eq!(h.state(), State::evaluate());
         assert!(matches!(
             h.feed(Event::Abort),
             Some(Command::SafeStop { .. })
         ));
         let states: Vec<_> = h.context.record.transitions.iter().map(|t| t.to).collect();
-        assert_eq!(
-            states,
-            [
-                "prepare",
-                "detect",
-                "approach",
-                "trial_grasp",
-                "evaluate",
-                "fault"
-            ]
-        );
+        let expected = [
+            State::prepare(),
+            State::detect(),
+            State::approach(),
+            State::trial_grasp(),
+            State::evaluate(),
+            State::fault(),
+        ];
+        assert_eq!(states, expected.map(|state| state.name()));
     }
 
     #[test]
@@ -777,7 +829,7 @@ mod tests {
             frames,
             true_line: None,
         });
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             &h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -791,6 +843,6 @@ mod tests {
         let mut h = Harness::new(1);
         h.feed(Event::Start);
         h.feed(h.frames(10, None));
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
     }
 }

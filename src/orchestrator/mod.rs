@@ -19,6 +19,6 @@ pub mod runner;
 mod test_cell;
 
 pub use command::{Command, Event};
-pub use machine::{Context, GraspTask, State};
+pub use machine::{Context, GraspTask, State, Superstate};
 pub use plan::Plan;
 pub use runner::Runner;

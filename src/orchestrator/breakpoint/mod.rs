@@ -105,7 +105,7 @@ impl RunValues {
                 truth.map(|t| t.error.alpha_rad),
                 grasp.map(|g| g.map.peak_dv_v()),
                 Some(record.grasps.len() as f64),
-                Some(count("regrasp") as f64),
+                Some(count(State::Regrasp {}.name()) as f64),
                 Some(record.transitions.last().map_or(0.0, |t| t.t_s)),
             ],
         }
@@ -185,12 +185,11 @@ pub struct Breakpoints {
 impl Breakpoints {
     /// Adds `break STATE [if CONDITION]`; returns its number.
     pub fn add(&mut self, state: &str, condition: Option<&str>) -> Result<usize, BreakpointError> {
-        let state = State::NAMES
-            .iter()
-            .find(|name| **name == state)
+        let state = State::named(state)
             .ok_or_else(|| BreakpointError::UnknownState {
                 name: state.to_owned(),
-            })?;
+            })?
+            .name();
         let condition = condition.map(Condition::parse).transpose()?;
         self.last_id += 1;
         self.list.push(Breakpoint {
@@ -746,25 +745,26 @@ mod tests {
 
     #[test]
     fn breakpoints_fire_by_state_and_condition() {
+        let (regrasp, verify) = (State::Regrasp {}.name(), State::Verify {}.name());
         let mut breaks = Breakpoints::default();
         assert!(matches!(
             breaks.add("regraps", None),
             Err(BreakpointError::UnknownState { .. })
         ));
-        let first = breaks.add("regrasp", Some("abs(n_mm) > 2")).unwrap();
-        let second = breaks.add("verify", None).unwrap();
+        let first = breaks.add(regrasp, Some("abs(n_mm) > 2")).unwrap();
+        let second = breaks.add(verify, None).unwrap();
         assert_eq!((first, second), (1, 2));
-        assert!(breaks.hit("regrasp", &values(&[("n_mm", 1.0)])).is_none());
+        assert!(breaks.hit(regrasp, &values(&[("n_mm", 1.0)])).is_none());
         assert_eq!(
             breaks
-                .hit("regrasp", &values(&[("n_mm", -2.2)]))
+                .hit(regrasp, &values(&[("n_mm", -2.2)]))
                 .map(|b| b.id),
             Some(1)
         );
-        assert_eq!(breaks.hit("verify", &values(&[])).map(|b| b.hits), Some(1));
+        assert_eq!(breaks.hit(verify, &values(&[])).map(|b| b.hits), Some(1));
         assert!(breaks.delete(1));
         assert!(!breaks.delete(1));
-        assert!(breaks.hit("regrasp", &values(&[("n_mm", -2.2)])).is_none());
+        assert!(breaks.hit(regrasp, &values(&[("n_mm", -2.2)])).is_none());
         assert_eq!(breaks.iter().count(), 1);
     }
 }
