@@ -26,64 +26,189 @@ use super::run::{
     Commentary, RecordArgs, finish_recording, print_outcome, print_transition, start_recording,
 };
 
-/// The commands, their arguments and what they do, for `help` and
-/// completion.
-const COMMANDS: [(&str, &str, &str); 16] = [
-    ("load", "TASK", "load a task file and start a new run of it"),
-    (
-        "reset",
-        "",
-        "start the task again from idle (same seed, same parameters)",
-    ),
-    ("step", "", "run until the next state transition"),
-    (
-        "continue",
-        "",
-        "run until a breakpoint, the end, or Ctrl-C (pauses at the next safe point)",
-    ),
-    (
-        "pause",
-        "",
-        "Ctrl-C pauses a running `continue`; between commands the run is already paused",
-    ),
-    (
-        "abort",
-        "",
-        "stop the run: the cell is made safe (arm stopped, jaws opened)",
-    ),
-    (
-        "break",
-        "STATE [if EXPR]",
-        "stop on entering STATE, if EXPR holds (e.g. abs(n_mm) > 2)",
-    ),
-    ("breaks", "", "list the breakpoints"),
-    ("delete", "N", "delete breakpoint N"),
-    (
-        "state",
-        "",
-        "the current state, the pending command, the last transitions",
-    ),
-    (
-        "show",
-        "tactile|pose|params",
-        "the last tactile map, the arm's pose, the task's parameters",
-    ),
-    (
-        "set",
-        "PARAM VALUE",
-        "change a task parameter, checked like the task file",
-    ),
-    (
-        "values",
-        "",
-        "the run's values a breakpoint condition can use",
-    ),
-    ("help", "", "this list"),
-    ("quit", "", "leave (Ctrl-D too)"),
-    ("exit", "", "same as quit"),
+/// A REPL command: everything `help`, completion and dispatch know of it.
+struct Spec {
+    name: &'static str,
+    /// Short forms, e.g. `s` for `step`.
+    aliases: &'static [&'static str],
+    /// Its arguments as `help` shows them; empty if it takes none (a
+    /// command that takes none refuses any before it runs).
+    args: &'static str,
+    help: &'static str,
+    /// What its arguments complete to.
+    completes: Completes,
+    run: fn(&mut Session, &[&str]) -> Result<Flow, String>,
+}
+
+/// What a command's arguments complete to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Completes {
+    Nothing,
+    /// A file name.
+    File,
+    /// A state, then `if`, then the values and operators of a condition.
+    Breakpoint,
+    /// A `show` topic.
+    Topic,
+    /// A task parameter's name.
+    Param,
+    /// A command's name.
+    Command,
+}
+
+/// The commands, in the order `help` lists them.
+const COMMANDS: [Spec; 16] = [
+    Spec {
+        name: "load",
+        aliases: &[],
+        args: "TASK",
+        help: "load a task file and start a new run of it",
+        completes: Completes::File,
+        run: load,
+    },
+    Spec {
+        name: "reset",
+        aliases: &[],
+        args: "",
+        help: "start the task again from idle (same seed, same parameters)",
+        completes: Completes::Nothing,
+        run: reset,
+    },
+    Spec {
+        name: "step",
+        aliases: &["s"],
+        args: "",
+        help: "run until the next state transition",
+        completes: Completes::Nothing,
+        run: |session, _| session.advance(Mode::Step),
+    },
+    Spec {
+        name: "continue",
+        aliases: &["c"],
+        args: "",
+        help: "run until a breakpoint, the end, or Ctrl-C (pauses at the next safe point)",
+        completes: Completes::Nothing,
+        run: |session, _| session.advance(Mode::Continue),
+    },
+    Spec {
+        name: "pause",
+        aliases: &[],
+        args: "",
+        help: "Ctrl-C pauses a running `continue`; between commands the run is already paused",
+        completes: Completes::Nothing,
+        run: pause,
+    },
+    Spec {
+        name: "abort",
+        aliases: &[],
+        args: "",
+        help: "stop the run: the cell is made safe (arm stopped, jaws opened)",
+        completes: Completes::Nothing,
+        run: abort,
+    },
+    Spec {
+        name: "break",
+        aliases: &["b"],
+        args: "STATE [if EXPR]",
+        help: "stop on entering STATE, if EXPR holds (e.g. abs(n_mm) > 2)",
+        completes: Completes::Breakpoint,
+        run: add_break,
+    },
+    Spec {
+        name: "breaks",
+        aliases: &[],
+        args: "",
+        help: "list the breakpoints",
+        completes: Completes::Nothing,
+        run: list_breaks,
+    },
+    Spec {
+        name: "delete",
+        aliases: &[],
+        args: "N",
+        help: "delete breakpoint N",
+        completes: Completes::Nothing,
+        run: delete_break,
+    },
+    Spec {
+        name: "state",
+        aliases: &[],
+        args: "",
+        help: "the current state, the pending command, the last transitions",
+        completes: Completes::Nothing,
+        run: state,
+    },
+    Spec {
+        name: "show",
+        aliases: &[],
+        args: "tactile|pose|params",
+        help: "the last tactile map, the arm's pose, the task's parameters",
+        completes: Completes::Topic,
+        run: show,
+    },
+    Spec {
+        name: "set",
+        aliases: &[],
+        args: "PARAM VALUE",
+        help: "change a task parameter, checked like the task file",
+        completes: Completes::Param,
+        run: set,
+    },
+    Spec {
+        name: "values",
+        aliases: &[],
+        args: "",
+        help: "the run's values a breakpoint condition can use",
+        completes: Completes::Nothing,
+        run: values,
+    },
+    Spec {
+        name: "help",
+        aliases: &[],
+        args: "",
+        help: "this list",
+        completes: Completes::Command,
+        run: |_, _| {
+            print_help();
+            Ok(Flow::Go)
+        },
+    },
+    Spec {
+        name: "quit",
+        aliases: &[],
+        args: "",
+        help: "leave (Ctrl-D too)",
+        completes: Completes::Nothing,
+        run: |_, _| Ok(Flow::Quit),
+    },
+    Spec {
+        name: "exit",
+        aliases: &[],
+        args: "",
+        help: "same as quit",
+        completes: Completes::Nothing,
+        run: |_, _| Ok(Flow::Quit),
+    },
 ];
 
-const SHOW_TOPICS: [&str; 3] = ["tactile", "pose", "params"];
+/// The command called `name`, by its name or a short form.
+fn find(name: &str) -> Option<&'static Spec> {
+    COMMANDS
+        .iter()
+        .find(|spec| spec.name == name || spec.aliases.contains(&name))
+}
+
+/// The topics of `show`, in the order `help` lists them.
+const SHOW_TOPICS: [(&str, fn(&mut Loaded) -> Result<(), String>); 3] = [
+    ("tactile", |loaded| show_tactile(loaded)),
+    ("pose", show_pose),
+    ("params", |loaded| {
+        for (name, value) in loaded.params.list() {
+            println!("{name} = {value}");
+        }
+        Ok(())
+    }),
+];
 
 /// A REPL session: the cell, the loaded task and its run.
 struct Session {
@@ -269,148 +394,21 @@ impl Session {
             .ok_or_else(|| "no task loaded: `load TASK` first".to_owned())
     }
 
+    /// Runs one line: its first word names the command, the rest are its
+    /// arguments.
     fn command(&mut self, line: &str) -> Result<Flow, String> {
         let mut words = line.split_whitespace();
         let name = words.next().unwrap_or_default();
         let args: Vec<&str> = words.collect();
-        let no_args = |args: &[&str]| match args.first() {
-            Some(extra) => Err(format!("`{name}` takes no argument (found `{extra}`)")),
-            None => Ok(()),
-        };
-        match name {
-            "help" => {
-                no_args(&args)?;
-                print_help();
-            }
-            "quit" | "exit" => {
-                no_args(&args)?;
-                return Ok(Flow::Quit);
-            }
-            "load" => match args.as_slice() {
-                [path] => self.load(Path::new(path))?,
-                _ => return Err("usage: load TASK".into()),
-            },
-            "reset" => {
-                no_args(&args)?;
-                let (params, seed) = {
-                    let loaded = self.loaded()?;
-                    (loaded.params.clone(), loaded.seed)
-                };
-                self.start(params, seed)?;
-                println!("reset: idle (seed {seed})");
-            }
-            "step" | "s" => {
-                no_args(&args)?;
-                self.advance(Mode::Step)?;
-            }
-            "continue" | "c" => {
-                no_args(&args)?;
-                self.advance(Mode::Continue)?;
-            }
-            "pause" => {
-                no_args(&args)?;
-                self.loaded()?;
-                return Err(
-                    "nothing is running: the run is paused between commands already; Ctrl-C pauses a `continue`".into(),
-                );
-            }
-            "abort" => {
-                no_args(&args)?;
-                self.abort()?;
-            }
-            "break" | "b" => self.add_break(&args)?,
-            "breaks" => {
-                no_args(&args)?;
-                let loaded = self.loaded()?;
-                if loaded.driver.breakpoints().iter().next().is_none() {
-                    println!("no breakpoints");
-                }
-                for breakpoint in loaded.driver.breakpoints().iter() {
-                    println!("{breakpoint}");
-                }
-            }
-            "delete" => match args.as_slice() {
-                [id] => {
-                    let id: usize = id
-                        .parse()
-                        .map_err(|_| format!("`{id}` is not a breakpoint number"))?;
-                    if !self.loaded()?.driver.breakpoints_mut().delete(id) {
-                        return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
-                    }
-                    println!("deleted breakpoint {id}");
-                }
-                _ => return Err("usage: delete N".into()),
-            },
-            "state" => {
-                no_args(&args)?;
-                show_state(self.loaded()?);
-            }
-            "show" => match args.as_slice() {
-                ["tactile"] => show_tactile(self.loaded()?)?,
-                ["pose"] => show_pose(self.loaded()?)?,
-                ["params"] => {
-                    for (name, value) in self.loaded()?.params.list() {
-                        println!("{name} = {value}");
-                    }
-                }
-                _ => return Err(format!("usage: show {}", SHOW_TOPICS.join("|"))),
-            },
-            "set" => match args.as_slice() {
-                [param, value @ ..] if !value.is_empty() => {
-                    let value = value.join(" ");
-                    let cell = self.cell.clone();
-                    let loaded = self.loaded()?;
-                    loaded
-                        .params
-                        .set(param, &value)
-                        .map_err(|e| e.to_string())?;
-                    let recorded = loaded
-                        .driver
-                        .set_plan(Plan::new(loaded.params.task(), &cell));
-                    println!("{param} = {value} (from the next command on)");
-                    if let Err(error) = recorded {
-                        println!("warning: {error}; the run goes on unrecorded");
-                    }
-                }
-                _ => return Err("usage: set PARAM VALUE (`show params` lists them)".into()),
-            },
-            "values" => {
-                no_args(&args)?;
-                let values = RunValues::of(self.loaded()?.driver.runner().record());
-                for name in RunValues::NAMES {
-                    let value = values
-                        .get(name)
-                        .map_or("(none yet)".to_owned(), |v| format!("{v:.4}"));
-                    println!("{name:>22} = {value:<12} {}", RunValues::describe(name));
-                }
-            }
-            other => return Err(format!("unknown command `{other}` (`help` lists them)")),
+        let spec =
+            find(name).ok_or_else(|| format!("unknown command `{name}` (`help` lists them)"))?;
+        if let (true, Some(extra)) = (spec.args.is_empty(), args.first()) {
+            return Err(format!("`{name}` takes no argument (found `{extra}`)"));
         }
-        Ok(Flow::Go)
+        (spec.run)(self, &args)
     }
 
-    fn add_break(&mut self, args: &[&str]) -> Result<(), String> {
-        let (state, condition) = match args {
-            [state] => (*state, None),
-            [state, "if", condition @ ..] if !condition.is_empty() => {
-                (*state, Some(condition.join(" ")))
-            }
-            _ => return Err("usage: break STATE [if EXPR]".into()),
-        };
-        let loaded = self.loaded()?;
-        let id = loaded
-            .driver
-            .breakpoints_mut()
-            .add(state, condition.as_deref())
-            .map_err(|e| e.to_string())?;
-        match condition {
-            Some(condition) => println!("breakpoint {id}: {state} if {condition}"),
-            None => println!("breakpoint {id}: {state}"),
-        }
-        Ok(())
-    }
-
-    fn advance(&mut self, mode: Mode) -> Result<(), String> {
+    fn advance(&mut self, mode: Mode) -> Result<Flow, String> {
         let pause = self.pause.clone();
         let loaded = self.loaded()?;
         if run_over(loaded.driver.runner()) {
@@ -450,22 +448,146 @@ impl Session {
             println!("run over in {}", runner.state().name());
             print_outcome(record);
         }
-        Ok(())
+        Ok(Flow::Go)
     }
+}
 
-    fn abort(&mut self) -> Result<(), String> {
-        let loaded = self.loaded()?;
-        let commentary = &mut loaded.commentary;
-        let recording_error = loaded
-            .driver
-            .abort(|runner| commentary.print_new(runner.record()))
-            .map_err(|nothing| nothing.to_string())?;
-        if let Some(error) = recording_error {
-            println!("warning: {error}; the run goes on unrecorded");
-        }
-        print_outcome(loaded.driver.runner().record());
-        Ok(())
+fn load(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
+    match args {
+        [path] => session.load(Path::new(path)).map(|()| Flow::Go),
+        _ => Err("usage: load TASK".into()),
     }
+}
+
+fn reset(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    let (params, seed) = {
+        let loaded = session.loaded()?;
+        (loaded.params.clone(), loaded.seed)
+    };
+    session.start(params, seed)?;
+    let state = session.loaded()?.driver.runner().state().name();
+    println!("reset: {state} (seed {seed})");
+    Ok(Flow::Go)
+}
+
+fn pause(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    session.loaded()?;
+    Err("nothing is running: the run is paused between commands already; Ctrl-C pauses a `continue`".into())
+}
+
+fn abort(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    let loaded = session.loaded()?;
+    let commentary = &mut loaded.commentary;
+    let recording_error = loaded
+        .driver
+        .abort(|runner| commentary.print_new(runner.record()))
+        .map_err(|nothing| nothing.to_string())?;
+    if let Some(error) = recording_error {
+        println!("warning: {error}; the run goes on unrecorded");
+    }
+    print_outcome(loaded.driver.runner().record());
+    Ok(Flow::Go)
+}
+
+fn add_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
+    let (state, condition) = match args {
+        [state] => (*state, None),
+        [state, "if", condition @ ..] if !condition.is_empty() => {
+            (*state, Some(condition.join(" ")))
+        }
+        _ => return Err("usage: break STATE [if EXPR]".into()),
+    };
+    let loaded = session.loaded()?;
+    let id = loaded
+        .driver
+        .breakpoints_mut()
+        .add(state, condition.as_deref())
+        .map_err(|e| e.to_string())?;
+    match condition {
+        Some(condition) => println!("breakpoint {id}: {state} if {condition}"),
+        None => println!("breakpoint {id}: {state}"),
+    }
+    Ok(Flow::Go)
+}
+
+fn list_breaks(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    let breakpoints = session.loaded()?.driver.breakpoints();
+    if breakpoints.iter().next().is_none() {
+        println!("no breakpoints");
+    }
+    for breakpoint in breakpoints.iter() {
+        println!("{breakpoint}");
+    }
+    Ok(Flow::Go)
+}
+
+fn delete_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
+    let [id] = args else {
+        return Err("usage: delete N".into());
+    };
+    let id: usize = id
+        .parse()
+        .map_err(|_| format!("`{id}` is not a breakpoint number"))?;
+    if !session.loaded()?.driver.breakpoints_mut().delete(id) {
+        return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
+    }
+    println!("deleted breakpoint {id}");
+    Ok(Flow::Go)
+}
+
+fn state(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    show_state(session.loaded()?);
+    Ok(Flow::Go)
+}
+
+fn show(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
+    let topic = match args {
+        [topic] => SHOW_TOPICS.iter().find(|(name, _)| name == topic),
+        _ => None,
+    };
+    let Some((_, show)) = topic else {
+        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
+        return Err(format!("usage: show {}", topics.join("|")));
+    };
+    show(session.loaded()?)?;
+    Ok(Flow::Go)
+}
+
+fn set(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
+    let [param, value @ ..] = args else {
+        return Err(SET_USAGE.into());
+    };
+    if value.is_empty() {
+        return Err(SET_USAGE.into());
+    }
+    let value = value.join(" ");
+    let cell = session.cell.clone();
+    let loaded = session.loaded()?;
+    loaded
+        .params
+        .set(param, &value)
+        .map_err(|e| e.to_string())?;
+    let recorded = loaded
+        .driver
+        .set_plan(Plan::new(loaded.params.task(), &cell));
+    println!("{param} = {value} (from the next command on)");
+    if let Err(error) = recorded {
+        println!("warning: {error}; the run goes on unrecorded");
+    }
+    Ok(Flow::Go)
+}
+
+const SET_USAGE: &str = "usage: set PARAM VALUE (`show params` lists them)";
+
+fn values(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
+    let values = RunValues::of(session.loaded()?.driver.runner().record());
+    for name in RunValues::NAMES {
+        let value = values
+            .get(name)
+            .map_or("(none yet)".to_owned(), |v| format!("{v:.4}"));
+        println!("{name:>22} = {value:<12} {}", RunValues::describe(name));
+    }
+    Ok(Flow::Go)
 }
 
 /// `path` for the first run of a session, `path-N.mcap` for the N-th.
@@ -508,14 +630,33 @@ fn command_name(command: &Command) -> &'static str {
 
 fn print_help() {
     println!("commands:");
-    for (name, args, what) in COMMANDS {
-        println!("  {:<28} {what}", format!("{name} {args}"));
+    for spec in &COMMANDS {
+        println!(
+            "  {:<28} {}",
+            format!("{} {}", spec.name, spec.args),
+            spec.help
+        );
     }
-    println!("(step, continue and break also as s, c and b)");
+    let short: Vec<_> = COMMANDS.iter().filter(|s| !s.aliases.is_empty()).collect();
+    println!(
+        "({} also as {})",
+        and_list(short.iter().map(|spec| spec.name)),
+        and_list(short.iter().flat_map(|spec| spec.aliases.iter().copied()))
+    );
     println!("states: {}", State::NAMES.join(", "));
     println!("values for `break STATE if EXPR` (`values` shows them now):");
     println!("  {}", RunValues::NAMES.join(", "));
     println!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
+}
+
+/// `a, b and c`.
+fn and_list<'a>(items: impl Iterator<Item = &'a str>) -> String {
+    let items: Vec<&str> = items.collect();
+    match items.split_last() {
+        Some((last, [])) => (*last).to_owned(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => String::new(),
+    }
 }
 
 fn show_state(loaded: &Loaded) {
@@ -723,26 +864,28 @@ impl Completer for ReplHelper {
         let start = before.rfind(char::is_whitespace).map_or(0, |i| i + 1);
         let word = &before[start..];
         let words: Vec<&str> = before[..start].split_whitespace().collect();
+        let names = || COMMANDS.iter().map(|spec| spec.name.to_owned()).collect();
         let candidates: Vec<String> = match words.as_slice() {
-            [] => COMMANDS
-                .iter()
-                .map(|(name, _, _)| (*name).to_owned())
-                .collect(),
-            ["load"] => return self.files.complete(line, pos, ctx),
-            ["break" | "b"] => State::NAMES.iter().map(|s| (*s).to_owned()).collect(),
-            ["break" | "b", _] => vec!["if".to_owned()],
-            ["break" | "b", _, "if", ..] => RunValues::NAMES
-                .iter()
-                .map(|s| (*s).to_owned())
-                .chain(["abs(", "and", "or", "not"].map(str::to_owned))
-                .collect(),
-            ["show"] => SHOW_TOPICS.iter().map(|s| (*s).to_owned()).collect(),
-            ["set"] => self.params.clone(),
-            ["help"] => COMMANDS
-                .iter()
-                .map(|(name, _, _)| (*name).to_owned())
-                .collect(),
-            _ => Vec::new(),
+            [] => names(),
+            [command, args @ ..] => match (find(command).map(|spec| spec.completes), args) {
+                (Some(Completes::File), []) => return self.files.complete(line, pos, ctx),
+                (Some(Completes::Breakpoint), []) => {
+                    State::NAMES.iter().map(|s| (*s).to_owned()).collect()
+                }
+                (Some(Completes::Breakpoint), [_]) => vec!["if".to_owned()],
+                (Some(Completes::Breakpoint), [_, "if", ..]) => RunValues::NAMES
+                    .iter()
+                    .map(|s| (*s).to_owned())
+                    .chain(["abs(", "and", "or", "not"].map(str::to_owned))
+                    .collect(),
+                (Some(Completes::Topic), []) => SHOW_TOPICS
+                    .iter()
+                    .map(|(name, _)| (*name).to_owned())
+                    .collect(),
+                (Some(Completes::Param), []) => self.params.clone(),
+                (Some(Completes::Command), []) => names(),
+                _ => Vec::new(),
+            },
         };
         let pairs = candidates
             .into_iter()
@@ -795,6 +938,25 @@ mod tests {
         assert_eq!(rows[10].chars().nth(20), Some('o'));
         assert!(rows[0].chars().all(|c| c == ' '));
         assert!(rows[8].contains('█'));
+    }
+
+    #[test]
+    fn every_command_and_short_form_is_found_once() {
+        let mut seen = std::collections::BTreeSet::new();
+        for spec in &COMMANDS {
+            for name in std::iter::once(&spec.name).chain(spec.aliases) {
+                assert!(seen.insert(*name), "`{name}` twice");
+                assert_eq!(find(name).map(|s| s.name), Some(spec.name));
+            }
+        }
+        assert!(find("frobnicate").is_none());
+        // `help` shows the topics `show` takes.
+        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
+        assert_eq!(
+            find("show").map(|s| s.args),
+            Some(topics.join("|").as_str())
+        );
+        assert_eq!(and_list(["s", "c", "b"].into_iter()), "s, c and b");
     }
 
     #[test]
