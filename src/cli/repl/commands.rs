@@ -192,8 +192,11 @@ pub(super) fn find(name: &str) -> Option<&'static Spec> {
         .find(|spec| spec.name == name || spec.aliases.contains(&name))
 }
 
+/// What `show` shows of a topic.
+type Show = fn(&mut Loaded) -> Result<(), String>;
+
 /// The topics of `show`, in the order `help` lists them.
-pub(super) const SHOW_TOPICS: [(&str, fn(&mut Loaded) -> Result<(), String>); 3] = [
+pub(super) const SHOW_TOPICS: [(&str, Show); 3] = [
     ("tactile", |loaded| show_tactile(loaded)),
     ("pose", show_pose),
     ("params", |loaded| {
