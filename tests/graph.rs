@@ -3,6 +3,9 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use cablecell::orchestrator::graph::superstates;
+use cablecell::orchestrator::{State, Superstate};
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -15,6 +18,12 @@ fn graph(task: &Path) -> Output {
         .expect("cablecell runs")
 }
 
+/// The edge `from -> to` with its label, as the graph draws it (but for
+/// any style after the label).
+fn edge(from: State, label: &str, to: State) -> String {
+    format!("{} -> {} [label=\"{label}\"", from.name(), to.name())
+}
+
 #[test]
 fn the_graph_holds_states_superstate_and_transitions() {
     let output = graph(&root().join("tasks/regrasp.toml"));
@@ -23,32 +32,40 @@ fn the_graph_holds_states_superstate_and_transitions() {
     assert!(dot.starts_with("digraph \"regrasp\" {"), "{dot}");
     assert!(dot.trim_end().ends_with('}'));
     assert_eq!(dot.matches('{').count(), dot.matches('}').count());
-    assert!(dot.contains("subgraph cluster_grasping {"));
-    // The superstate's children sit inside its cluster.
-    let cluster = &dot[dot.find("subgraph cluster_grasping").unwrap()..];
+    let grasping = Superstate::Grasping {}.name();
+    assert!(dot.contains(&format!("subgraph cluster_{grasping} {{")));
+    // The superstate's children, as the machine has them, sit inside its
+    // cluster.
+    let cluster = &dot[dot.find(&format!("subgraph cluster_{grasping}")).unwrap()..];
     let cluster = &cluster[..cluster.find("  }").unwrap()];
-    for state in [
-        "prepare",
-        "detect",
-        "approach",
-        "trial_grasp",
-        "evaluate",
-        "regrasp",
-        "verify",
-    ] {
+    let [(superstate, children)] = superstates().try_into().expect("one superstate");
+    assert_eq!(superstate, Superstate::Grasping {});
+    assert_eq!(children.len(), 7);
+    for state in children {
+        let state = state.name();
         assert!(
             cluster.contains(&format!("    {state} [")),
             "{state} not in the cluster"
         );
     }
-    assert!(!cluster.contains("idle ["));
+    assert!(!cluster.contains(&format!("{} [", State::Idle {}.name())));
     for edge in [
-        "idle -> prepare [label=\"Start\"]",
-        "evaluate -> regrasp [label=\"Tactile (regrasps left)\"]",
-        "verify -> done [label=\"Tactile (within tolerance)\"]",
-        "[ltail=cluster_grasping, label=\"DeviceFault, Abort (any state of grasping)\"",
+        edge(State::Idle {}, "Start", State::Prepare {}),
+        edge(
+            State::Evaluate {},
+            "Tactile (regrasps left)",
+            State::Regrasp {},
+        ),
+        edge(
+            State::Verify {},
+            "Tactile (within tolerance)",
+            State::Done {},
+        ),
+        format!(
+            "[ltail=cluster_{grasping}, label=\"DeviceFault, Abort (any state of {grasping})\""
+        ),
     ] {
-        assert!(dot.contains(edge), "missing {edge}");
+        assert!(dot.contains(&edge), "missing {edge}");
     }
     assert!(!dot.contains("skipped"), "the shipped task skips nothing");
 }
@@ -62,7 +79,7 @@ fn states_the_task_skips_are_drawn_as_skipped() {
     let path = dir.path().join("no-regrasp.toml");
     std::fs::write(&path, no_regrasp).unwrap();
     let dot = String::from_utf8(graph(&path).stdout).unwrap();
-    for state in ["regrasp", "verify"] {
+    for state in [State::Regrasp {}, State::Verify {}].map(|s| s.name()) {
         assert!(
             dot.contains(&format!(
                 "{state} [shape=box, style=\"rounded,dashed\", color=grey, fontcolor=grey, label=\"{state}\\n(skipped: regrasp.max_regrasps = 0)\"]"
@@ -70,8 +87,14 @@ fn states_the_task_skips_are_drawn_as_skipped() {
             "{dot}"
         );
     }
-    assert!(dot.contains("evaluate -> regrasp [label=\"Tactile (regrasps left)\", style=dashed"));
-    assert!(dot.contains("evaluate [shape=box, style=rounded]"));
+    let to_regrasp = edge(
+        State::Evaluate {},
+        "Tactile (regrasps left)",
+        State::Regrasp {},
+    );
+    assert!(dot.contains(&format!("{to_regrasp}, style=dashed")));
+    let evaluate = State::Evaluate {}.name();
+    assert!(dot.contains(&format!("{evaluate} [shape=box, style=rounded]")));
 }
 
 #[test]

@@ -7,6 +7,7 @@ use std::process::Command;
 
 mod common;
 
+use cablecell::orchestrator::State;
 use common::root;
 use rexpect::session::{PtySession, spawn_command};
 
@@ -39,8 +40,13 @@ fn expect(session: &mut PtySession, text: &str) {
     }
 }
 
-fn prompt(session: &mut PtySession, state: &str) {
-    expect(session, &format!("regrasp:{state}> "));
+fn prompt(session: &mut PtySession, state: State) {
+    expect(session, &format!("regrasp:{}> ", state.name()));
+}
+
+/// A transition as the REPL shows it.
+fn arrow(from: State, to: State) -> String {
+    format!("{} → {}", from.name(), to.name())
 }
 
 fn send(session: &mut PtySession, line: &str) {
@@ -62,26 +68,26 @@ fn quit(mut session: PtySession) {
 fn step_through_the_whole_regrasp_task() {
     let home = tempfile::tempdir().unwrap();
     let mut s = repl(home.path(), "0", &["--no-record"]);
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     let states = [
-        "prepare",
-        "detect",
-        "approach",
-        "trial_grasp",
-        "evaluate",
-        "regrasp",
-        "verify",
-        "done",
+        State::Prepare {},
+        State::Detect {},
+        State::Approach {},
+        State::TrialGrasp {},
+        State::Evaluate {},
+        State::Regrasp {},
+        State::Verify {},
+        State::Done {},
     ];
-    let mut previous = "idle";
+    let mut previous = State::Idle {};
     for state in states {
         send(&mut s, "step");
-        expect(&mut s, &format!("{previous} → {state}"));
-        if state != "done" {
-            expect(&mut s, &format!("in {state}; next: "));
+        expect(&mut s, &arrow(previous, state));
+        if state != (State::Done {}) {
+            expect(&mut s, &format!("in {}; next: ", state.name()));
             prompt(&mut s, state);
         }
-        if state == "regrasp" {
+        if state == (State::Regrasp {}) {
             // The trial grasp's map, its centroids and its line, drawn.
             send(&mut s, "show tactile");
             expect(&mut s, "trial grasp at 3.289 s: mean Δv");
@@ -101,20 +107,20 @@ fn step_through_the_whole_regrasp_task() {
     // Entering `done` ends the run.
     expect(&mut s, "run over in done");
     expect(&mut s, "success: within tolerance");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     send(&mut s, "step");
     expect(
         &mut s,
         "cannot: the run is over (done): `reset` starts it again",
     );
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     send(&mut s, "state");
     expect(&mut s, "state done");
-    expect(&mut s, "verify → done");
-    prompt(&mut s, "done");
+    expect(&mut s, &arrow(State::Verify {}, State::Done {}));
+    prompt(&mut s, State::Done {});
     send(&mut s, "reset");
     expect(&mut s, "reset: idle (seed 3)");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     quit(s);
 }
 
@@ -122,41 +128,41 @@ fn step_through_the_whole_regrasp_task() {
 fn a_conditional_breakpoint_fires_and_another_does_not() {
     let home = tempfile::tempdir().unwrap();
     let mut s = repl(home.path(), "0", &["--no-record"]);
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "break regrasp if abs(n_mm > 2");
     expect(
         &mut s,
         "cannot: in the condition, column 5: expected a number",
     );
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "break regrasp if abs(n_mm) > 2");
     expect(&mut s, "breakpoint 1: regrasp if abs(n_mm) > 2");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     // At `done` the latest estimate is the regrasp's, -0.586 mm.
     send(&mut s, "break done if abs(n_mm) > 2");
     expect(&mut s, "breakpoint 2: done if abs(n_mm) > 2");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "continue");
-    expect(&mut s, "evaluate → regrasp");
+    expect(&mut s, &arrow(State::Evaluate {}, State::Regrasp {}));
     expect(
         &mut s,
         "breakpoint 1 hit on entering regrasp (if abs(n_mm) > 2)",
     );
-    prompt(&mut s, "regrasp");
+    prompt(&mut s, State::Regrasp {});
     send(&mut s, "values");
     expect(&mut s, "n_mm = -2.386");
-    prompt(&mut s, "regrasp");
+    prompt(&mut s, State::Regrasp {});
     send(&mut s, "continue");
-    expect(&mut s, "verify → done");
+    expect(&mut s, &arrow(State::Verify {}, State::Done {}));
     expect(&mut s, "run over in done");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     send(&mut s, "breaks");
     expect(&mut s, "1: regrasp if abs(n_mm) > 2 (hit 1 times)");
     expect(&mut s, "2: done if abs(n_mm) > 2 (hit 0 times)");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     send(&mut s, "delete 7");
     expect(&mut s, "cannot: there is no breakpoint 7");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     quit(s);
 }
 
@@ -164,34 +170,34 @@ fn a_conditional_breakpoint_fires_and_another_does_not() {
 fn set_checks_values_like_the_task_file_and_takes_effect() {
     let home = tempfile::tempdir().unwrap();
     let mut s = repl(home.path(), "0", &["--no-record"]);
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "set tolerance.n_mm -1");
     expect(
         &mut s,
         "cannot: tolerance.n_mm: expected a number > 0, found -1",
     );
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "set tolerance.n_m 1");
     expect(&mut s, "cannot: unknown parameter `tolerance.n_m`");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "frobnicate");
     expect(&mut s, "cannot: unknown command `frobnicate`");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     // Loose enough that the trial grasp (-2.386 mm, -0.124 rad) will do.
     send(&mut s, "set tolerance.n_mm 3");
     expect(&mut s, "tolerance.n_mm = 3 (from the next command on)");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "set tolerance.alpha_rad 0.2");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     // Tab completes the command and the parameter.
     s.send("sho\tpar\t").unwrap();
     send(&mut s, "");
     expect(&mut s, "tolerance.n_mm = 3");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "continue");
-    expect(&mut s, "evaluate → done");
+    expect(&mut s, &arrow(State::Evaluate {}, State::Done {}));
     expect(&mut s, "after 0 regrasp(s)");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     quit(s);
 }
 
@@ -202,28 +208,28 @@ fn ctrl_c_during_continue_pauses_at_a_safe_point_and_the_run_goes_on() {
     let record = recording.to_str().unwrap();
     // At the pace of a real cell the run takes 4.5 s of wall time.
     let mut s = repl(home.path(), "1", &["--record", record]);
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "continue");
-    expect(&mut s, "prepare → detect");
+    expect(&mut s, &arrow(State::Prepare {}, State::Detect {}));
     s.send_control('c').unwrap();
     let (_, paused) = s.exp_regex("paused in [a-z_]+").unwrap();
-    let state = paused.trim_start_matches("paused in ").to_owned();
+    let state = State::named(paused.trim_start_matches("paused in ")).expect("a state");
     assert!(
         [
-            "detect",
-            "approach",
-            "trial_grasp",
-            "evaluate",
-            "regrasp",
-            "verify"
+            State::Detect {},
+            State::Approach {},
+            State::TrialGrasp {},
+            State::Evaluate {},
+            State::Regrasp {},
+            State::Verify {},
         ]
-        .contains(&state.as_str()),
-        "paused in {state}"
+        .contains(&state),
+        "{paused}"
     );
-    prompt(&mut s, &state);
+    prompt(&mut s, state);
     send(&mut s, "continue");
     expect(&mut s, "run over in done");
-    prompt(&mut s, "done");
+    prompt(&mut s, State::Done {});
     quit(s);
     // The history and the recording are kept.
     let history = std::fs::read_to_string(home.path().join(".cablecell_history")).unwrap();
@@ -237,30 +243,30 @@ fn ctrl_c_during_continue_pauses_at_a_safe_point_and_the_run_goes_on() {
 fn abort_makes_the_cell_safe_and_refuses_what_cannot_be_done() {
     let home = tempfile::tempdir().unwrap();
     let mut s = repl(home.path(), "0", &["--no-record"]);
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "abort");
     expect(&mut s, "cannot: the run has not started: nothing to abort");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "show tactile");
     expect(&mut s, "cannot: no tactile map yet");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "break approach");
-    prompt(&mut s, "idle");
+    prompt(&mut s, State::Idle {});
     send(&mut s, "continue");
     expect(
         &mut s,
         "breakpoint 1 hit on entering approach; next: move to the standoff pose",
     );
-    prompt(&mut s, "approach");
+    prompt(&mut s, State::Approach {});
     send(&mut s, "abort");
-    expect(&mut s, "approach → fault");
+    expect(&mut s, &arrow(State::Approach {}, State::Fault {}));
     expect(
         &mut s,
         "device fault in approach: aborted by the operator; the cell was made safe",
     );
-    prompt(&mut s, "fault");
+    prompt(&mut s, State::Fault {});
     send(&mut s, "load tasks/missing.toml");
     expect(&mut s, "cannot: tasks/missing.toml: cannot read the file");
-    prompt(&mut s, "fault");
+    prompt(&mut s, State::Fault {});
     quit(s);
 }

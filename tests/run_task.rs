@@ -9,7 +9,7 @@ use common::root;
 
 use cablecell::cell::CellFile;
 use cablecell::cell::load_cell;
-use cablecell::orchestrator::Runner;
+use cablecell::orchestrator::{Runner, State};
 use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::task::{TaskFile, load_task};
 
@@ -100,25 +100,23 @@ fn the_sequence_visits_every_state_in_order() {
     // Seed 3 gives a trial grasp out of tolerance (checked below).
     let record = run(&task, &cell, 3);
     let states: Vec<_> = record.transitions.iter().map(|t| t.to).collect();
-    assert_eq!(
-        &states[..6],
-        [
-            "prepare",
-            "detect",
-            "approach",
-            "trial_grasp",
-            "evaluate",
-            "regrasp"
-        ]
-    );
-    assert_eq!(states.last(), Some(&"done"));
-    assert_eq!(states[states.len() - 2], "verify");
+    let sequence = [
+        State::Prepare {},
+        State::Detect {},
+        State::Approach {},
+        State::TrialGrasp {},
+        State::Evaluate {},
+        State::Regrasp {},
+    ];
+    assert_eq!(&states[..6], sequence.map(|s| s.name()));
+    assert_eq!(states.last(), Some(&State::Done {}.name()));
+    assert_eq!(states[states.len() - 2], State::Verify {}.name());
     // Simulated time only moves forward, and motions take time.
     assert!(record.transitions.windows(2).all(|w| w[0].t_s <= w[1].t_s));
     let timings = record.state_timings();
     let approach = timings
         .iter()
-        .find(|t| t.state == "approach")
+        .find(|t| t.state == State::Approach {}.name())
         .expect("approach");
     assert!(approach.duration_s.expect("closed") > 0.1);
 }
@@ -134,7 +132,12 @@ fn a_trial_grasp_within_tolerance_skips_the_regrasp() {
         "{:?}",
         record.outcome
     );
-    assert!(record.transitions.iter().all(|t| t.to != "regrasp"));
+    assert!(
+        record
+            .transitions
+            .iter()
+            .all(|t| t.to != State::Regrasp {}.name())
+    );
     assert_eq!(record.grasps.len(), 1);
 }
 
@@ -193,7 +196,7 @@ fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
     assert!(
         states
             .iter()
-            .any(|s| s["state"] == "evaluate" && s["duration_s"].as_f64().is_some())
+            .any(|s| s["state"] == State::Evaluate {}.name() && s["duration_s"].as_f64().is_some())
     );
     let grasps = report["grasps"].as_array().expect("grasps");
     assert!(!grasps.is_empty());
@@ -212,24 +215,22 @@ fn a_silent_tactile_sensor_is_a_device_fault_and_keeps_the_record() {
     });
     let report = common::regrasp_fault_report(&cell);
     assert_eq!(report["outcome"]["device"], "tactile");
-    assert_eq!(report["outcome"]["state"], "evaluate");
+    assert_eq!(report["outcome"]["state"], State::Evaluate {}.name());
     let to: Vec<_> = report["transitions"]
         .as_array()
         .expect("transitions")
         .iter()
         .map(|t| t["to"].clone())
         .collect();
-    assert_eq!(
-        to,
-        [
-            "prepare",
-            "detect",
-            "approach",
-            "trial_grasp",
-            "evaluate",
-            "fault"
-        ]
-    );
+    let expected = [
+        State::Prepare {},
+        State::Detect {},
+        State::Approach {},
+        State::TrialGrasp {},
+        State::Evaluate {},
+        State::Fault {},
+    ];
+    assert_eq!(to, expected.map(|s| s.name()));
     // The safe stop opened the jaws without trouble.
     assert_eq!(
         report["safe_stop_problems"].as_array().map(Vec::len),

@@ -12,8 +12,12 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use nalgebra::Isometry3;
+
 use super::breakpoint::{Breakpoints, RunValues};
+use super::plan::Plan;
 use super::runner::Runner;
+use crate::hw::DeviceError;
 use crate::recording::RecordingError;
 
 /// How far to go.
@@ -41,23 +45,95 @@ pub enum Stop {
     Finished { state: &'static str },
 }
 
+/// Why there is no run to abort.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NothingToAbort {
+    #[error("the run has not started: nothing to abort")]
+    NotStarted,
+    #[error("the run is over ({state})")]
+    Over { state: &'static str },
+}
+
 pub struct Driver {
-    pub runner: Runner,
-    pub breakpoints: Breakpoints,
+    runner: Runner,
+    breakpoints: Breakpoints,
     /// Cell seconds per wall-clock second while running: 1 shows a
     /// simulated cell at the speed of a real one; `None` runs as fast as
     /// the cell goes. A real cell's clock is the wall clock, so pacing
     /// never waits for it.
-    pub pace: Option<f64>,
+    pace: Option<f64>,
 }
 
 impl Driver {
-    pub fn new(runner: Runner) -> Self {
+    /// A driver of `runner` with `breakpoints`, paced at `pace` (see
+    /// [`Driver::advance`]; `None`: as fast as the cell goes).
+    pub fn new(runner: Runner, breakpoints: Breakpoints, pace: Option<f64>) -> Self {
         Self {
             runner,
-            breakpoints: Breakpoints::default(),
-            pace: None,
+            breakpoints,
+            pace,
         }
+    }
+
+    /// The run: its state, record, pending command and plan.
+    pub fn runner(&self) -> &Runner {
+        &self.runner
+    }
+
+    pub fn breakpoints(&self) -> &Breakpoints {
+        &self.breakpoints
+    }
+
+    /// To add and delete breakpoints between steps.
+    pub fn breakpoints_mut(&mut self) -> &mut Breakpoints {
+        &mut self.breakpoints
+    }
+
+    /// The runner and the breakpoints, to finish the run and keep the
+    /// breakpoints for the next.
+    pub fn into_parts(self) -> (Runner, Breakpoints) {
+        (self.runner, self.breakpoints)
+    }
+
+    /// Replaces the plan between two steps (see [`Runner::set_plan`]).
+    pub fn set_plan(&mut self, plan: Plan) -> Result<(), RecordingError> {
+        self.runner.set_plan(plan)
+    }
+
+    /// Where the arm's TCP is now, asked of the arm.
+    pub fn base_from_tcp(&mut self) -> Result<Isometry3<f64>, DeviceError> {
+        self.runner.base_from_tcp()
+    }
+
+    /// Stops the run and makes the cell safe: the machine goes to `fault`
+    /// and its safe stop is carried out at once, whatever the breakpoints
+    /// say (the pending command is dropped unexecuted). `on_step` as in
+    /// [`Driver::advance`].
+    ///
+    /// The cell is made safe even if the recording fails: the error that
+    /// ended the recording, if one did, is returned in `Ok`.
+    pub fn abort(
+        &mut self,
+        on_step: impl FnMut(&Runner),
+    ) -> Result<Option<RecordingError>, NothingToAbort> {
+        let mut recording_error = match self.runner.abort() {
+            Ok(true) => None,
+            Ok(false) if self.runner.state().is_final() => {
+                return Err(NothingToAbort::Over {
+                    state: self.runner.state().name(),
+                });
+            }
+            Ok(false) => return Err(NothingToAbort::NotStarted),
+            Err(error) => Some(error),
+        };
+        let breakpoints = std::mem::take(&mut self.breakpoints);
+        let no_pause = AtomicBool::new(false);
+        let stopped = self.advance(Mode::Continue, &no_pause, on_step);
+        self.breakpoints = breakpoints;
+        if let Err(error) = stopped {
+            recording_error.get_or_insert(error);
+        }
+        Ok(recording_error)
     }
 
     /// Runs until `mode` says stop, calling `on_step` after every step (to
@@ -132,13 +208,18 @@ impl Driver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::orchestrator::State;
     use crate::task::load_task;
 
     fn driver(seed: u64) -> Driver {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let task = load_task(&root.join("tasks/regrasp.toml")).unwrap();
         let cell = crate::orchestrator::test_cell::sim_cell_with_oracle();
-        Driver::new(Runner::for_task(&task, &cell, seed).unwrap())
+        Driver::new(
+            Runner::for_task(&task, &cell, seed).unwrap(),
+            Breakpoints::default(),
+            None,
+        )
     }
 
     #[test]
@@ -150,7 +231,7 @@ mod tests {
             match stepped.advance(Mode::Step, &no_pause, |_| {}).unwrap() {
                 Stop::Transition { to, .. } => stops.push(to),
                 Stop::Finished { state } => {
-                    assert_eq!(state, "done");
+                    assert_eq!(state, State::Done {}.name());
                     break;
                 }
                 other => panic!("{other:?}"),
@@ -161,7 +242,9 @@ mod tests {
             continued
                 .advance(Mode::Continue, &no_pause, |_| {})
                 .unwrap(),
-            Stop::Finished { state: "done" }
+            Stop::Finished {
+                state: State::Done {}.name()
+            }
         );
         let states: Vec<_> = continued
             .runner
@@ -171,22 +254,21 @@ mod tests {
             .map(|t| t.to)
             .collect();
         assert_eq!(stops, states);
-        assert_eq!(stops.first(), Some(&"prepare"));
+        assert_eq!(stops.first(), Some(&State::Prepare {}.name()));
     }
 
     #[test]
     fn a_breakpoint_stops_before_its_state_runs_and_a_pause_is_taken() {
         let no_pause = AtomicBool::new(false);
         let mut d = driver(3);
-        d.breakpoints.add("trial_grasp", None).unwrap();
-        d.breakpoints
-            .add("regrasp", Some("abs(n_mm) > 100"))
-            .unwrap();
+        let (trial_grasp, regrasp) = (State::TrialGrasp {}.name(), State::Regrasp {}.name());
+        d.breakpoints.add(trial_grasp, None).unwrap();
+        d.breakpoints.add(regrasp, Some("abs(n_mm) > 100")).unwrap();
         assert_eq!(
             d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
             Stop::Breakpoint {
                 id: 1,
-                state: "trial_grasp"
+                state: trial_grasp
             }
         );
         // Nothing grasped yet: the grasp command waits.
@@ -195,12 +277,16 @@ mod tests {
         let pause = AtomicBool::new(true);
         assert_eq!(
             d.advance(Mode::Continue, &pause, |_| {}).unwrap(),
-            Stop::Paused { state: "evaluate" }
+            Stop::Paused {
+                state: State::Evaluate {}.name()
+            }
         );
         assert!(!pause.load(Ordering::SeqCst), "the request is taken");
         assert_eq!(
             d.advance(Mode::Continue, &no_pause, |_| {}).unwrap(),
-            Stop::Finished { state: "done" }
+            Stop::Finished {
+                state: State::Done {}.name()
+            }
         );
     }
 }

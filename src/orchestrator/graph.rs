@@ -5,60 +5,98 @@
 
 use std::fmt::Write;
 
+use super::machine::{State, Superstate};
 use crate::task::TaskFile;
 
-/// The superstate and the states it holds.
-pub const SUPERSTATE: (&str, [&str; 7]) = (
-    "grasping",
-    [
-        "prepare",
-        "detect",
-        "approach",
-        "trial_grasp",
-        "evaluate",
-        "regrasp",
-        "verify",
-    ],
-);
-
 /// Every transition a state makes: (from, event and condition, to).
-pub const TRANSITIONS: [(&str, &str, &str); 18] = [
-    ("idle", "Start", "prepare"),
-    ("prepare", "Tactile (bias measured)", "detect"),
-    ("prepare", "Tactile (too few frames)", "fault"),
-    ("detect", "Detected (a cable)", "approach"),
-    ("detect", "Detected (none)", "failed"),
-    ("approach", "Arrived", "trial_grasp"),
-    ("trial_grasp", "Grasped (holding)", "evaluate"),
-    ("trial_grasp", "Grasped (empty)", "failed"),
-    ("evaluate", "Tactile (within tolerance)", "done"),
-    ("evaluate", "Tactile (regrasps left)", "regrasp"),
+pub const TRANSITIONS: [(State, &str, State); 18] = [
+    (State::Idle {}, "Start", State::Prepare {}),
     (
-        "evaluate",
-        "Tactile (no contact, fit failed, no regrasp left)",
-        "failed",
+        State::Prepare {},
+        "Tactile (bias measured)",
+        State::Detect {},
     ),
-    ("evaluate", "Tactile (no frames)", "fault"),
-    ("regrasp", "Grasped (holding)", "verify"),
-    ("regrasp", "Grasped (empty)", "failed"),
-    ("verify", "Tactile (within tolerance)", "done"),
-    ("verify", "Tactile (regrasps left)", "regrasp"),
     (
-        "verify",
-        "Tactile (no contact, fit failed, no regrasp left)",
-        "failed",
+        State::Prepare {},
+        "Tactile (too few frames)",
+        State::Fault {},
     ),
-    ("verify", "Tactile (no frames)", "fault"),
+    (State::Detect {}, "Detected (a cable)", State::Approach {}),
+    (State::Detect {}, "Detected (none)", State::Failed {}),
+    (State::Approach {}, "Arrived", State::TrialGrasp {}),
+    (
+        State::TrialGrasp {},
+        "Grasped (holding)",
+        State::Evaluate {},
+    ),
+    (State::TrialGrasp {}, "Grasped (empty)", State::Failed {}),
+    (
+        State::Evaluate {},
+        "Tactile (within tolerance)",
+        State::Done {},
+    ),
+    (
+        State::Evaluate {},
+        "Tactile (regrasps left)",
+        State::Regrasp {},
+    ),
+    (
+        State::Evaluate {},
+        "Tactile (no contact, fit failed, no regrasp left)",
+        State::Failed {},
+    ),
+    (State::Evaluate {}, "Tactile (no frames)", State::Fault {}),
+    (State::Regrasp {}, "Grasped (holding)", State::Verify {}),
+    (State::Regrasp {}, "Grasped (empty)", State::Failed {}),
+    (
+        State::Verify {},
+        "Tactile (within tolerance)",
+        State::Done {},
+    ),
+    (
+        State::Verify {},
+        "Tactile (regrasps left)",
+        State::Regrasp {},
+    ),
+    (
+        State::Verify {},
+        "Tactile (no contact, fit failed, no regrasp left)",
+        State::Failed {},
+    ),
+    (State::Verify {}, "Tactile (no frames)", State::Fault {}),
 ];
 
-/// Transitions the superstate makes for every state it holds.
-pub const SUPERSTATE_TRANSITIONS: [(&str, &str); 1] = [("DeviceFault, Abort", "fault")];
+/// Transitions a superstate makes for every state it holds: (superstate,
+/// event, to).
+pub const SUPERSTATE_TRANSITIONS: [(Superstate, &str, State); 1] = [(
+    Superstate::Grasping {},
+    "DeviceFault, Abort",
+    State::Fault {},
+)];
+
+/// Each superstate with the states it holds, in the order of the sequence.
+pub fn superstates() -> Vec<(Superstate, Vec<State>)> {
+    let mut out: Vec<(Superstate, Vec<State>)> = Vec::new();
+    for state in State::all() {
+        let Some(parent) = state.parent() else {
+            continue;
+        };
+        match out.iter_mut().find(|(superstate, _)| *superstate == parent) {
+            Some((_, children)) => children.push(state),
+            None => out.push((parent, vec![state])),
+        }
+    }
+    out
+}
 
 /// The states `task` never enters, each with the reason.
-pub fn skipped_states(task: &TaskFile) -> Vec<(&'static str, String)> {
+pub fn skipped_states(task: &TaskFile) -> Vec<(State, String)> {
     if task.regrasp.max_regrasps == 0 {
         let reason = "skipped: regrasp.max_regrasps = 0".to_owned();
-        vec![("regrasp", reason.clone()), ("verify", reason)]
+        vec![
+            (State::Regrasp {}, reason.clone()),
+            (State::Verify {}, reason),
+        ]
     } else {
         Vec::new()
     }
@@ -68,51 +106,66 @@ pub fn skipped_states(task: &TaskFile) -> Vec<(&'static str, String)> {
 /// grey with the reason.
 pub fn dot(task: &TaskFile) -> String {
     let skipped = skipped_states(task);
-    let is_skipped = |state: &str| skipped.iter().any(|(s, _)| *s == state);
-    let node = |out: &mut String, state: &str, indent: &str| {
+    let is_skipped = |state: &State| skipped.iter().any(|(s, _)| s == state);
+    let node = |out: &mut String, state: &State, indent: &str| {
         let shape = match state {
-            "done" => "doublecircle",
-            "failed" | "fault" => "doubleoctagon",
+            State::Done {} => "doublecircle",
+            final_state if final_state.is_final() => "doubleoctagon",
             _ => "box",
         };
-        let _ = match skipped.iter().find(|(s, _)| *s == state) {
+        let name = state.name();
+        let _ = match skipped.iter().find(|(s, _)| s == state) {
             Some((_, reason)) => writeln!(
                 out,
-                "{indent}{state} [shape={shape}, style=\"rounded,dashed\", color=grey, fontcolor=grey, label=\"{state}\\n({reason})\"];"
+                "{indent}{name} [shape={shape}, style=\"rounded,dashed\", color=grey, fontcolor=grey, label=\"{name}\\n({reason})\"];"
             ),
-            None => writeln!(out, "{indent}{state} [shape={shape}, style=rounded];"),
+            None => writeln!(out, "{indent}{name} [shape={shape}, style=rounded];"),
         };
     };
     let mut out = String::new();
     let _ = writeln!(out, "digraph {} {{", quote(&task.task.name));
     out.push_str("  compound=true;\n  rankdir=LR;\n  node [fontname=\"Helvetica\"];\n  edge [fontname=\"Helvetica\", fontsize=10];\n");
-    node(&mut out, "idle", "  ");
-    let (superstate, children) = SUPERSTATE;
-    let _ = writeln!(
-        out,
-        "  subgraph cluster_{superstate} {{\n    label=\"{superstate}\";\n    style=rounded;"
-    );
-    for child in children {
-        node(&mut out, child, "    ");
-    }
-    out.push_str("  }\n");
-    for state in ["done", "failed", "fault"] {
+    // The states outside any superstate where a run starts, each
+    // superstate as a cluster of its states, then where a run ends.
+    let all = State::all();
+    let outside = all.iter().filter(|s| s.parent().is_none());
+    for state in outside.clone().filter(|s| !s.is_final()) {
         node(&mut out, state, "  ");
     }
-    for (from, event, to) in TRANSITIONS {
+    let superstates = superstates();
+    for (superstate, children) in &superstates {
+        let superstate = superstate.name();
+        let _ = writeln!(
+            out,
+            "  subgraph cluster_{superstate} {{\n    label=\"{superstate}\";\n    style=rounded;"
+        );
+        for child in children {
+            node(&mut out, child, "    ");
+        }
+        out.push_str("  }\n");
+    }
+    for state in outside.filter(|s| s.is_final()) {
+        node(&mut out, state, "  ");
+    }
+    for (from, event, to) in &TRANSITIONS {
         let style = if is_skipped(from) || is_skipped(to) {
             ", style=dashed, color=grey, fontcolor=grey"
         } else {
             ""
         };
+        let (from, to) = (from.name(), to.name());
         let _ = writeln!(out, "  {from} -> {to} [label={}{style}];", quote(event));
     }
-    // An edge leaving the cluster stands for one from each of its states.
-    let anchor = children[children.len() / 2];
-    for (event, to) in SUPERSTATE_TRANSITIONS {
+    // An edge leaving a cluster stands for one from each of its states.
+    for (superstate, event, to) in &SUPERSTATE_TRANSITIONS {
+        let Some((_, children)) = superstates.iter().find(|(s, _)| s == superstate) else {
+            continue;
+        };
+        let (anchor, superstate) = (children[children.len() / 2].name(), superstate.name());
         let _ = writeln!(
             out,
-            "  {anchor} -> {to} [ltail=cluster_{superstate}, label={}, style=bold];",
+            "  {anchor} -> {} [ltail=cluster_{superstate}, label={}, style=bold];",
+            to.name(),
             quote(&format!("{event} (any state of {superstate})"))
         );
     }
@@ -127,18 +180,19 @@ fn quote(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::orchestrator::{Runner, State};
+    use crate::orchestrator::Runner;
     use crate::task::load_task;
 
     /// Every (from, to) a run makes is drawn, directly or through the
     /// superstate.
     fn assert_drawn(runner: &Runner) {
         for t in &runner.record().transitions {
-            let direct = TRANSITIONS
+            let from = State::named(t.from).expect("a state's name");
+            let to = State::named(t.to).expect("a state's name");
+            let direct = TRANSITIONS.iter().any(|(f, _, t)| (*f, *t) == (from, to));
+            let via_superstate = SUPERSTATE_TRANSITIONS
                 .iter()
-                .any(|(f, _, to)| *f == t.from && *to == t.to);
-            let via_superstate = SUPERSTATE.1.contains(&t.from)
-                && SUPERSTATE_TRANSITIONS.iter().any(|(_, to)| *to == t.to);
+                .any(|(s, _, t)| from.parent() == Some(*s) && *t == to);
             assert!(
                 direct || via_superstate,
                 "{} → {} is not drawn",
@@ -170,15 +224,16 @@ mod tests {
         }
         assert!(runner.abort().unwrap());
         runner.run_to_end().unwrap();
-        assert_eq!(runner.state().name(), "fault");
+        assert_eq!(runner.state(), &State::Fault {});
         assert_drawn(&runner);
         // The runs went through the whole sequence, both ways out of a judgement.
-        for pair in [
-            ("evaluate", "done"),
-            ("evaluate", "regrasp"),
-            ("verify", "done"),
-            ("regrasp", "verify"),
+        for (from, to) in [
+            (State::Evaluate {}, State::Done {}),
+            (State::Evaluate {}, State::Regrasp {}),
+            (State::Verify {}, State::Done {}),
+            (State::Regrasp {}, State::Verify {}),
         ] {
+            let pair = (from.name(), to.name());
             assert!(seen.contains(&pair), "{pair:?} never happened");
         }
         // Every state is drawn.

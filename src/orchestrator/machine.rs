@@ -26,29 +26,34 @@ use crate::hw::tactile::TactileFrame;
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
 use crate::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
 
-/// What the machine shares with the runner.
+/// What the machine shares with the runner: lent to the machine for each
+/// event, owned by the runner in between, so that the runner can change
+/// the plan between two events (the REPL's `set`).
 #[derive(Debug)]
 pub struct Context {
     /// The cell's clock when the event being handled arrived.
     pub now_s: f64,
     /// What the cell must do next, left by the latest entry action.
     pub command: Option<Command>,
+    /// What the task asks for; read by every entry action and judgement,
+    /// so a change applies from the next command on.
+    pub plan: Plan,
     pub record: RunRecord,
 }
 
 impl Context {
-    pub fn new(record: RunRecord) -> Self {
+    pub fn new(plan: Plan, record: RunRecord) -> Self {
         Self {
             now_s: 0.0,
             command: None,
+            plan,
             record,
         }
     }
 }
 
-/// The machine's own storage: the plan and what it learnt on the way.
+/// The machine's own storage: what it learnt on the way.
 pub struct GraspTask {
-    plan: Plan,
     /// Per-taxel rest voltages, measured in `prepare`.
     bias: Option<Bias>,
     /// Where the next grasp puts the TCP.
@@ -59,27 +64,26 @@ pub struct GraspTask {
 }
 
 impl GraspTask {
-    pub fn new(plan: Plan) -> Self {
+    pub fn new() -> Self {
         Self {
-            plan,
             bias: None,
             base_from_tcp_aim: Isometry3::identity(),
             base_from_tcp_grasped: Isometry3::identity(),
             regrasps_done: 0,
         }
     }
+}
 
-    /// Replaces the plan between two events (the REPL's `set`): what the
-    /// run learnt stays; the next entry action and judgement use it.
-    pub(super) fn set_plan(&mut self, plan: Plan) {
-        self.plan = plan;
+impl Default for GraspTask {
+    fn default() -> Self {
+        Self::new()
     }
 }
 
 #[state_machine(
     initial = "State::idle()",
-    state(derive(Debug, Clone, PartialEq, Eq)),
-    superstate(derive(Debug)),
+    state(derive(Debug, Clone, Copy, PartialEq, Eq)),
+    superstate(derive(Debug, Clone, Copy, PartialEq, Eq)),
     after_transition = "Self::after_transition"
 )]
 impl GraspTask {
@@ -97,21 +101,17 @@ impl GraspTask {
     fn prepare(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
             Event::Tactile { frames, .. } => {
-                let mut estimator = BiasEstimator::new(self.plan.bias_frames);
+                let mut estimator = BiasEstimator::new(context.plan.bias_frames);
                 match frames.iter().find_map(|frame| estimator.push(&frame.raw)) {
                     Some(bias) => {
                         self.bias = Some(bias);
                         Transition(State::detect())
                     }
-                    None => fault(
-                        context,
-                        None,
-                        format!(
-                            "{} bias frames read, {} needed",
-                            frames.len(),
-                            self.plan.bias_frames
-                        ),
-                    ),
+                    None => {
+                        let needed = context.plan.bias_frames;
+                        let error = format!("{} bias frames read, {needed} needed", frames.len());
+                        fault(context, None, error)
+                    }
                 }
             }
             _ => Super,
@@ -125,10 +125,11 @@ impl GraspTask {
             Event::Detected(detections) => match detections.cables.first() {
                 Some(detection) => {
                     // Aim so that the cable lands on the target pose.
-                    let sensor_from_cable = planar_to_spatial(&self.plan.target.sensor_from_line());
+                    let sensor_from_cable =
+                        planar_to_spatial(&context.plan.target.sensor_from_line());
                     self.base_from_tcp_aim = detection.base_from_cable
                         * sensor_from_cable.inverse()
-                        * self.plan.tcp_from_sensor.inverse();
+                        * context.plan.tcp_from_sensor.inverse();
                     Transition(State::approach())
                 }
                 None => fail(context, Failure::NothingDetected),
@@ -224,8 +225,8 @@ impl GraspTask {
     #[action]
     fn enter_prepare(&mut self, context: &mut Context) {
         context.command = Some(Command::Prepare {
-            open_mm: self.plan.open_mm,
-            bias_frames: self.plan.bias_frames,
+            open_mm: context.plan.open_mm,
+            bias_frames: context.plan.bias_frames,
         });
     }
 
@@ -237,8 +238,8 @@ impl GraspTask {
     #[action]
     fn enter_approach(&mut self, context: &mut Context) {
         context.command = Some(Command::MoveTo {
-            base_from_tcp: self.standoff_from(&self.base_from_tcp_aim),
-            speed_mm_s: self.plan.speed_mm_s,
+            base_from_tcp: standoff_from(&self.base_from_tcp_aim, context.plan.standoff_mm),
+            speed_mm_s: context.plan.speed_mm_s,
         });
     }
 
@@ -246,15 +247,15 @@ impl GraspTask {
     fn enter_trial_grasp(&mut self, context: &mut Context) {
         context.command = Some(Command::Grasp {
             base_from_tcp: self.base_from_tcp_aim,
-            speed_mm_s: self.plan.speed_mm_s,
-            grip_current_a: self.plan.grip_current_a,
+            speed_mm_s: context.plan.speed_mm_s,
+            grip_current_a: context.plan.grip_current_a,
         });
     }
 
     #[action]
     fn enter_read_tactile(&mut self, context: &mut Context) {
         context.command = Some(Command::ReadTactile {
-            frames: self.plan.average_frames,
+            frames: context.plan.average_frames,
         });
     }
 
@@ -263,28 +264,28 @@ impl GraspTask {
         self.regrasps_done += 1;
         context.command = Some(Command::Regrasp {
             base_from_tcp: self.base_from_tcp_aim,
-            speed_mm_s: self.plan.speed_mm_s,
-            open_mm: self.plan.open_mm,
-            retreat_mm: self.plan.retreat_mm,
-            grip_current_a: self.plan.grip_current_a,
+            speed_mm_s: context.plan.speed_mm_s,
+            open_mm: context.plan.open_mm,
+            retreat_mm: context.plan.retreat_mm,
+            grip_current_a: context.plan.grip_current_a,
         });
     }
 
     #[action]
     fn enter_fault(&mut self, context: &mut Context) {
         context.command = Some(Command::SafeStop {
-            open_mm: self.plan.open_mm,
+            open_mm: context.plan.open_mm,
         });
     }
 }
 
-impl GraspTask {
-    /// The pose `standoff_mm` back from `base_from_tcp` along the approach
-    /// axis (the TCP's z).
-    fn standoff_from(&self, base_from_tcp: &Isometry3<f64>) -> Isometry3<f64> {
-        base_from_tcp * Translation3::new(0.0, 0.0, -self.plan.standoff_mm)
-    }
+/// The pose `standoff_mm` back from `base_from_tcp` along the approach
+/// axis (the TCP's z).
+fn standoff_from(base_from_tcp: &Isometry3<f64>, standoff_mm: f64) -> Isometry3<f64> {
+    base_from_tcp * Translation3::new(0.0, 0.0, -standoff_mm)
+}
 
+impl GraspTask {
     fn on_grasped(
         &mut self,
         context: &mut Context,
@@ -319,14 +320,12 @@ impl GraspTask {
         let Some(map) = self.bias.as_ref().and_then(|bias| bias.remove_mean(&raw)) else {
             return fault(context, None, "no tactile frames to evaluate".into());
         };
-        let fit = self
-            .plan
-            .estimator
-            .estimate(&map, &self.plan.fit, true_line);
+        let plan = &context.plan;
+        let fit = plan.estimator.estimate(&map, &plan.fit, true_line);
         let estimated_error = fit
             .as_ref()
             .ok()
-            .map(|fit| fit.line().error_to(&self.plan.target));
+            .map(|fit| fit.line().error_to(&context.plan.target));
         context.record.grasps.push(GraspRecord {
             attempt,
             t_s: context.now_s,
@@ -336,7 +335,7 @@ impl GraspTask {
             estimated_error,
             truth: true_line.map(|line| Truth {
                 line,
-                error: line.error_to(&self.plan.target),
+                error: line.error_to(&context.plan.target),
                 estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
             }),
         });
@@ -351,17 +350,17 @@ impl GraspTask {
             }
         };
         let line = fit.line();
-        let error = line.error_to(&self.plan.target);
-        if error.within(&self.plan.tolerance) {
+        let error = line.error_to(&context.plan.target);
+        if error.within(&context.plan.tolerance) {
             context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
             Transition(State::done())
-        } else if attempt < self.plan.max_regrasps {
+        } else if attempt < context.plan.max_regrasps {
             let sensor_old_from_new =
-                t_corr_with_gain(&line, &self.plan.target, &self.plan.correction_gain);
+                t_corr_with_gain(&line, &context.plan.target, &context.plan.correction_gain);
             self.base_from_tcp_aim = self.base_from_tcp_grasped
-                * self.plan.tcp_from_sensor
+                * context.plan.tcp_from_sensor
                 * sensor_old_from_new
-                * self.plan.tcp_from_sensor.inverse();
+                * context.plan.tcp_from_sensor.inverse();
             Transition(State::regrasp())
         } else {
             fail(
@@ -383,37 +382,71 @@ impl GraspTask {
     }
 }
 
-impl State {
-    /// Every state's name, in the order of the sequence.
-    pub const NAMES: [&'static str; 11] = [
-        "idle",
-        "prepare",
-        "detect",
-        "approach",
-        "trial_grasp",
-        "evaluate",
-        "regrasp",
-        "verify",
-        "done",
-        "failed",
-        "fault",
-    ];
+/// The one table of names: each state's variant beside its handler, whose
+/// name is the state's name in records, reports, breakpoints and the graph,
+/// in the order of the sequence. `name`'s match is exhaustive, so a state
+/// the machine gains does not compile until it is named here; a test checks
+/// that each variant sits beside its own handler.
+macro_rules! names {
+    (
+        states: $($variant:ident: $handler:ident),+;
+        superstates: $($super_variant:ident: $super_handler:ident),+;
+    ) => {
+        impl State {
+            /// Every state's name, in the order of the sequence.
+            pub const NAMES: [&'static str; [$(stringify!($handler)),+].len()] =
+                [$(stringify!($handler)),+];
 
-    /// The state's name as records and reports spell it.
-    pub fn name(&self) -> &'static str {
-        match self {
-            State::Idle { .. } => "idle",
-            State::Prepare { .. } => "prepare",
-            State::Detect { .. } => "detect",
-            State::Approach { .. } => "approach",
-            State::TrialGrasp { .. } => "trial_grasp",
-            State::Evaluate { .. } => "evaluate",
-            State::Regrasp { .. } => "regrasp",
-            State::Verify { .. } => "verify",
-            State::Done { .. } => "done",
-            State::Failed { .. } => "failed",
-            State::Fault { .. } => "fault",
+            /// Every state, in the order of the sequence.
+            pub fn all() -> [State; Self::NAMES.len()] {
+                [$(State::$handler()),+]
+            }
+
+            /// The state's name, as records and reports spell it.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(State::$variant { .. } => stringify!($handler),)+
+                }
+            }
         }
+
+        impl Superstate {
+            /// The superstate's name, as the graph spells it.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(Superstate::$super_variant { .. } => stringify!($super_handler),)+
+                }
+            }
+        }
+    };
+}
+
+names! {
+    states:
+        Idle: idle,
+        Prepare: prepare,
+        Detect: detect,
+        Approach: approach,
+        TrialGrasp: trial_grasp,
+        Evaluate: evaluate,
+        Regrasp: regrasp,
+        Verify: verify,
+        Done: done,
+        Failed: failed,
+        Fault: fault;
+    superstates:
+        Grasping: grasping;
+}
+
+impl State {
+    /// The state called `name`, if there is one.
+    pub fn named(name: &str) -> Option<State> {
+        Self::all().into_iter().find(|state| state.name() == name)
+    }
+
+    /// The superstate that holds this state, if any.
+    pub fn parent(&self) -> Option<Superstate> {
+        statig::blocking::State::<GraspTask>::superstate(&mut self.clone())
     }
 
     /// Whether the run is over in this state.
@@ -500,8 +533,8 @@ mod tests {
         fn with_estimator(max_regrasps: u32, estimator: Estimator) -> Self {
             let plan = plan(max_regrasps, estimator);
             let record = RunRecord::new("t", "c", 0, plan.target, plan.tolerance);
-            let mut context = Context::new(record);
-            let machine = GraspTask::new(plan)
+            let mut context = Context::new(plan, record);
+            let machine = GraspTask::new()
                 .uninitialized_state_machine()
                 .init_with_context(&mut context);
             let noiseless = SimTactileConfig {
@@ -535,8 +568,8 @@ mod tests {
             }
         }
 
-        fn state(&self) -> &'static str {
-            self.machine.state().name()
+        fn state(&self) -> State {
+            *self.machine.state()
         }
 
         /// Start, bias, a detected cable at the origin, arrival.
@@ -570,6 +603,26 @@ mod tests {
     }
 
     #[test]
+    fn each_state_is_named_after_its_handler_once() {
+        // `all` makes each state with its handler's constructor and
+        // `NAMES` holds the handlers' names: each must be the name of the
+        // variant the constructor makes.
+        let names = State::all().map(|state| state.name());
+        assert_eq!(names, State::NAMES);
+        let unique: std::collections::BTreeSet<_> = names.iter().collect();
+        assert_eq!(unique.len(), names.len());
+        for state in State::all() {
+            assert_eq!(State::named(state.name()), Some(state));
+        }
+        assert_eq!(State::named("trial grasp"), None);
+        assert_eq!(
+            State::prepare().parent().map(|s| s.name()),
+            Some("grasping")
+        );
+        assert_eq!(State::idle().parent(), None);
+    }
+
+    #[test]
     fn the_trial_grasp_aims_the_pad_at_the_detected_cable() {
         let mut h = Harness::new(1);
         let Command::Grasp { base_from_tcp, .. } = h.up_to_trial_grasp() else {
@@ -579,7 +632,7 @@ mod tests {
         let base_from_sensor = base_from_tcp * plan(1, Estimator::Centroids).tcp_from_sensor;
         assert!((base_from_sensor.translation.vector).norm() < 1e-9);
         assert!(base_from_sensor.rotation.angle() < 1e-9);
-        assert_eq!(h.state(), "trial_grasp");
+        assert_eq!(h.state(), State::trial_grasp());
     }
 
     #[test]
@@ -592,7 +645,7 @@ mod tests {
         ));
         let on_target = h.frames(4, Some(LineInSensor::new(0.0, 0.1)));
         assert_eq!(h.feed(on_target), None);
-        assert_eq!(h.state(), "done");
+        assert_eq!(h.state(), State::done());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Success { regrasps: 0 })
@@ -611,7 +664,7 @@ mod tests {
         h.grasped_at(grasped);
         let truth = LineInSensor::new(0.15, -2.0);
         let Some(Command::Regrasp { base_from_tcp, .. }) = h.feed(h.frames(4, Some(truth))) else {
-            panic!("expected a regrasp in {}", h.state());
+            panic!("expected a regrasp in {:?}", h.state());
         };
         // Where the true cable lies in the new pad frame: near the target.
         let tcp_from_sensor = plan(1, Estimator::Oracle).tcp_from_sensor;
@@ -631,7 +684,7 @@ mod tests {
             error.n_mm.abs() < 0.2 && error.alpha_rad.abs() < 0.02,
             "{error:?}"
         );
-        assert_eq!(h.state(), "regrasp");
+        assert_eq!(h.state(), State::regrasp());
     }
 
     #[test]
@@ -645,9 +698,9 @@ mod tests {
             h.grasped_at(Isometry3::identity()),
             Some(Command::ReadTactile { .. })
         ));
-        assert_eq!(h.state(), "verify");
+        assert_eq!(h.state(), State::verify());
         assert_eq!(h.feed(off), None);
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         match &h.context.record.outcome {
             Some(RunOutcome::Failed {
                 reason: Failure::ToleranceNotReached { regrasps: 1, error },
@@ -664,7 +717,7 @@ mod tests {
         h.grasped_at(Isometry3::identity());
         let empty = h.frames(4, None);
         h.feed(empty);
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -681,7 +734,7 @@ mod tests {
             base_from_tcp: Isometry3::identity(),
             grip: GripOutcome::Empty,
         });
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
 
         let mut h = Harness::new(1);
         h.feed(Event::Start);
@@ -690,7 +743,7 @@ mod tests {
             cables: Vec::new(),
             image: None,
         }));
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -710,7 +763,7 @@ mod tests {
             }],
             image: None,
         }));
-        assert_eq!(h.state(), "approach");
+        assert_eq!(h.state(), State::approach());
         let error = DeviceError::Timeout {
             device: DeviceKind::Arm,
             waited_ms: 500,
@@ -719,10 +772,10 @@ mod tests {
             h.feed(Event::DeviceFault(error)),
             Some(Command::SafeStop { open_mm: 20.0 })
         );
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
         match &h.context.record.outcome {
             Some(RunOutcome::Fault { state, device, .. }) => {
-                assert_eq!(*state, "approach");
+                assert_eq!(*state, State::approach().name());
                 assert_eq!(*device, Some(DeviceKind::Arm));
             }
             other => panic!("{other:?}"),
@@ -739,7 +792,7 @@ mod tests {
             None
         );
         assert_eq!(h.context.record.safe_stop_problems.len(), 1);
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
     }
 
     #[test]
@@ -747,23 +800,21 @@ mod tests {
         let mut h = Harness::new(1);
         h.up_to_trial_grasp();
         h.grasped_at(Isometry3::identity());
-        assert_eq!(h.state(), "evaluate");
+        assert_eq!(h.state(), State::evaluate());
         assert!(matches!(
             h.feed(Event::Abort),
             Some(Command::SafeStop { .. })
         ));
         let states: Vec<_> = h.context.record.transitions.iter().map(|t| t.to).collect();
-        assert_eq!(
-            states,
-            [
-                "prepare",
-                "detect",
-                "approach",
-                "trial_grasp",
-                "evaluate",
-                "fault"
-            ]
-        );
+        let expected = [
+            State::prepare(),
+            State::detect(),
+            State::approach(),
+            State::trial_grasp(),
+            State::evaluate(),
+            State::fault(),
+        ];
+        assert_eq!(states, expected.map(|state| state.name()));
     }
 
     #[test]
@@ -778,7 +829,7 @@ mod tests {
             frames,
             true_line: None,
         });
-        assert_eq!(h.state(), "failed");
+        assert_eq!(h.state(), State::failed());
         assert!(matches!(
             &h.context.record.outcome,
             Some(RunOutcome::Failed {
@@ -792,6 +843,6 @@ mod tests {
         let mut h = Harness::new(1);
         h.feed(Event::Start);
         h.feed(h.frames(10, None));
-        assert_eq!(h.state(), "fault");
+        assert_eq!(h.state(), State::fault());
     }
 }

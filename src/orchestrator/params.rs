@@ -34,16 +34,12 @@ impl TaskParams {
         let text = read(path)?;
         let task: TaskFile = parse(path, &text)?;
         let mut table: toml::Table = parse(path, &text)?;
-        // Optional values with a default are parameters too.
+        // Optional values with a default are parameters too, at the value
+        // the task file's loader gave them.
         if let Some(toml::Value::Table(regrasp)) = table.get_mut("regrasp") {
             regrasp.entry("correction_gain").or_insert_with(|| {
-                let gain: toml::Table = [
-                    ("n".to_owned(), toml::Value::Float(1.0)),
-                    ("alpha".to_owned(), toml::Value::Float(1.0)),
-                ]
-                .into_iter()
-                .collect();
-                toml::Value::Table(gain)
+                toml::Value::try_from(task.regrasp.correction_gain)
+                    .expect("a correction gain, two numbers, is a TOML table")
             });
         }
         Ok(Self {

@@ -26,7 +26,6 @@ pub struct Runner {
     machine: InitializedStateMachine<GraspTask>,
     context: Context,
     cell: Cell,
-    plan: Plan,
     recording: Option<Recording>,
 }
 
@@ -42,15 +41,14 @@ struct Recording {
 impl Runner {
     pub fn new(plan: Plan, cell: Cell, task_name: &str, seed: u64) -> Self {
         let record = RunRecord::new(task_name, &cell.name, seed, plan.target, plan.tolerance);
-        let mut context = Context::new(record);
-        let machine = GraspTask::new(plan.clone())
+        let mut context = Context::new(plan, record);
+        let machine = GraspTask::new()
             .uninitialized_state_machine()
             .init_with_context(&mut context);
         Self {
             machine,
             context,
             cell,
-            plan,
             recording: None,
         }
     }
@@ -82,18 +80,18 @@ impl Runner {
 
     /// The run's description with the plan in force at `t_s`.
     fn run_message(&self, t_s: f64) -> RunMessage {
-        let record = &self.context.record;
+        let (record, plan) = (&self.context.record, &self.context.plan);
         RunMessage {
             timestamp: Timestamp::of(t_s),
             task: record.task.clone(),
             cell: record.cell.clone(),
             seed: record.seed,
-            target: self.plan.target,
-            tolerance: self.plan.tolerance,
-            estimator: self.plan.estimator,
-            pitch_mm: self.plan.fit.pitch_mm,
-            contact_threshold_v: self.plan.fit.contact_threshold_v,
-            bias_frames: self.plan.bias_frames,
+            target: plan.target,
+            tolerance: plan.tolerance,
+            estimator: plan.estimator,
+            pitch_mm: plan.fit.pitch_mm,
+            contact_threshold_v: plan.fit.contact_threshold_v,
+            bias_frames: plan.bias_frames,
         }
     }
 
@@ -177,7 +175,7 @@ impl Runner {
         }
         let record = &self.context.record;
         for grasp in &record.grasps[recording.grasps..] {
-            recorder.grasp(grasp, self.plan.estimator)?;
+            recorder.grasp(grasp, self.context.plan.estimator)?;
         }
         recording.grasps = record.grasps.len();
         for transition in &record.transitions[recording.transitions..] {
@@ -232,7 +230,7 @@ impl Runner {
     }
 
     pub fn plan(&self) -> &Plan {
-        &self.plan
+        &self.context.plan
     }
 
     /// Replaces the plan between two steps. The pending command was given
@@ -242,11 +240,9 @@ impl Runner {
     pub fn set_plan(&mut self, plan: Plan) -> Result<(), RecordingError> {
         self.context.record.target = plan.target;
         self.context.record.tolerance = plan.tolerance;
-        // SAFETY: statig marks `inner_mut` unsafe only because a change may
-        // break the machine's own invariants; the plan is read by entry
-        // actions and handlers alone, and the state is left as it is.
-        unsafe { self.machine.inner_mut() }.set_plan(plan.clone());
-        self.plan = plan;
+        // The machine reads the plan from the context it is lent with
+        // each event: between two events it is the runner's to change.
+        self.context.plan = plan;
         let run = self.run_message(self.cell.clock.now_s());
         let Some(recording) = &mut self.recording else {
             return Ok(());

@@ -1,14 +1,7 @@
-//! Breakpoints on a run: a state to stop in, and optionally a condition on
-//! the run's named values (`abs(n_mm) > 2 and regrasps < 2`).
-//!
-//! The condition language is small on purpose: numbers, the names of
-//! [`RunValues`], `+ - * /`, unary minus, `abs(...)`, parentheses, the
-//! comparisons `< <= > >= == !=`, and `and` / `or` (`not` too). Names and
-//! types are checked when the breakpoint is set, so a typo is an error then
-//! and not a breakpoint that silently never fires.
+//! The condition language: a condition's text parsed, its names and types
+//! checked, then evaluated on a run's values.
 
-use super::machine::State;
-use crate::record::RunRecord;
+use super::values::RunValues;
 
 /// Why a condition could not be parsed; `column` counts characters from 1.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -32,90 +25,6 @@ pub enum ConditionError {
         expected: &'static str,
         found: &'static str,
     },
-}
-
-/// A breakpoint could not be set.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum BreakpointError {
-    /// No state of the machine has this name: use one of `known`.
-    #[error("unknown state `{name}`; states: {}", State::NAMES.join(", "))]
-    UnknownState { name: String },
-    /// The condition after `if` does not parse.
-    #[error("in the condition, {0}")]
-    Condition(#[from] ConditionError),
-}
-
-/// The values of a run a condition may use, read from its record. A value
-/// the run does not have yet (no grasp, no truth on a real cell) is
-/// missing, and a condition that needs it is false.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct RunValues {
-    values: [Option<f64>; RunValues::NAMES.len()],
-}
-
-impl RunValues {
-    /// Every name a condition may use, with `describe`'s meaning.
-    pub const NAMES: [&'static str; 12] = [
-        "n_mm",
-        "alpha_rad",
-        "error_n_mm",
-        "error_alpha_rad",
-        "true_n_mm",
-        "true_alpha_rad",
-        "true_error_n_mm",
-        "true_error_alpha_rad",
-        "peak_dv_v",
-        "grasps",
-        "regrasps",
-        "t_s",
-    ];
-
-    /// What each name means, for `help`.
-    pub fn describe(name: &str) -> &'static str {
-        match name {
-            "n_mm" => "the latest grasp's estimated offset of the cable on the pad",
-            "alpha_rad" => "the latest grasp's estimated angle of the cable on the pad",
-            "error_n_mm" | "error_alpha_rad" => "the latest estimate against the target",
-            "true_n_mm" | "true_alpha_rad" => "where the cable really lies (simulated cells)",
-            "true_error_n_mm" | "true_error_alpha_rad" => "the true pose against the target",
-            "peak_dv_v" => "the largest Δv of the latest grasp's map",
-            "grasps" => "grasps evaluated so far (trial grasp included)",
-            "regrasps" => "regrasps started so far",
-            "t_s" => "the cell's clock at the latest transition",
-            _ => "",
-        }
-    }
-
-    pub fn of(record: &RunRecord) -> Self {
-        let grasp = record.grasps.last();
-        let line = grasp.and_then(|g| g.fit.as_ref()).map(|fit| fit.line());
-        let error = grasp.and_then(|g| g.estimated_error);
-        let truth = grasp.and_then(|g| g.truth.as_ref());
-        let count = |state| record.transitions.iter().filter(|t| t.to == state).count();
-        Self {
-            values: [
-                line.map(|l| l.offset_mm),
-                line.map(|l| l.alpha_rad),
-                error.map(|e| e.n_mm),
-                error.map(|e| e.alpha_rad),
-                truth.map(|t| t.line.offset_mm),
-                truth.map(|t| t.line.alpha_rad),
-                truth.map(|t| t.error.n_mm),
-                truth.map(|t| t.error.alpha_rad),
-                grasp.map(|g| g.map.peak_dv_v()),
-                Some(record.grasps.len() as f64),
-                Some(count("regrasp") as f64),
-                Some(record.transitions.last().map_or(0.0, |t| t.t_s)),
-            ],
-        }
-    }
-
-    /// The value called `name`; `None` if unknown or missing.
-    pub fn get(&self, name: &str) -> Option<f64> {
-        let index = Self::NAMES.iter().position(|n| *n == name)?;
-        self.values[index]
-    }
 }
 
 /// A parsed condition; evaluating it cannot fail, only find a value
@@ -152,76 +61,6 @@ impl Condition {
 
     pub fn text(&self) -> &str {
         &self.text
-    }
-}
-
-/// Stop when the machine enters `state`, if `condition` holds then.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Breakpoint {
-    pub id: usize,
-    pub state: &'static str,
-    pub condition: Option<Condition>,
-    /// How many times it has stopped the run.
-    pub hits: usize,
-}
-
-impl std::fmt::Display for Breakpoint {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.id, self.state)?;
-        if let Some(condition) = &self.condition {
-            write!(f, " if {}", condition.text())?;
-        }
-        write!(f, " (hit {} times)", self.hits)
-    }
-}
-
-/// The breakpoints of a session, numbered from 1 in the order set.
-#[derive(Debug, Clone, Default)]
-pub struct Breakpoints {
-    list: Vec<Breakpoint>,
-    last_id: usize,
-}
-
-impl Breakpoints {
-    /// Adds `break STATE [if CONDITION]`; returns its number.
-    pub fn add(&mut self, state: &str, condition: Option<&str>) -> Result<usize, BreakpointError> {
-        let state = State::NAMES
-            .iter()
-            .find(|name| **name == state)
-            .ok_or_else(|| BreakpointError::UnknownState {
-                name: state.to_owned(),
-            })?;
-        let condition = condition.map(Condition::parse).transpose()?;
-        self.last_id += 1;
-        self.list.push(Breakpoint {
-            id: self.last_id,
-            state,
-            condition,
-            hits: 0,
-        });
-        Ok(self.last_id)
-    }
-
-    /// Removes breakpoint `id`; false if there is none.
-    pub fn delete(&mut self, id: usize) -> bool {
-        let before = self.list.len();
-        self.list.retain(|b| b.id != id);
-        self.list.len() < before
-    }
-
-    pub fn iter(&self) -> impl Iterator<Item = &Breakpoint> {
-        self.list.iter()
-    }
-
-    /// The first breakpoint that fires on entering `state` with `values`,
-    /// its hit counted.
-    pub fn hit(&mut self, state: &str, values: &RunValues) -> Option<&Breakpoint> {
-        let breakpoint = self
-            .list
-            .iter_mut()
-            .find(|b| b.state == state && b.condition.as_ref().is_none_or(|c| c.holds(values)))?;
-        breakpoint.hits += 1;
-        Some(breakpoint)
     }
 }
 
@@ -665,17 +504,10 @@ impl Parser {
 mod tests {
     use super::*;
 
-    fn values(pairs: &[(&str, f64)]) -> RunValues {
-        let mut v = RunValues::default();
-        for (name, value) in pairs {
-            let index = RunValues::NAMES.iter().position(|n| n == name).unwrap();
-            v.values[index] = Some(*value);
-        }
-        v
-    }
-
     fn holds(text: &str, pairs: &[(&str, f64)]) -> bool {
-        Condition::parse(text).unwrap().holds(&values(pairs))
+        Condition::parse(text)
+            .unwrap()
+            .holds(&RunValues::with(pairs))
     }
 
     #[test]
@@ -742,29 +574,5 @@ mod tests {
             matches!(e, ConditionError::Syntax { column: 10, .. }),
             "{e}"
         );
-    }
-
-    #[test]
-    fn breakpoints_fire_by_state_and_condition() {
-        let mut breaks = Breakpoints::default();
-        assert!(matches!(
-            breaks.add("regraps", None),
-            Err(BreakpointError::UnknownState { .. })
-        ));
-        let first = breaks.add("regrasp", Some("abs(n_mm) > 2")).unwrap();
-        let second = breaks.add("verify", None).unwrap();
-        assert_eq!((first, second), (1, 2));
-        assert!(breaks.hit("regrasp", &values(&[("n_mm", 1.0)])).is_none());
-        assert_eq!(
-            breaks
-                .hit("regrasp", &values(&[("n_mm", -2.2)]))
-                .map(|b| b.id),
-            Some(1)
-        );
-        assert_eq!(breaks.hit("verify", &values(&[])).map(|b| b.hits), Some(1));
-        assert!(breaks.delete(1));
-        assert!(!breaks.delete(1));
-        assert!(breaks.hit("regrasp", &values(&[("n_mm", -2.2)])).is_none());
-        assert_eq!(breaks.iter().count(), 1);
     }
 }

@@ -1,0 +1,149 @@
+//! What the REPL shows of a run: its state and the next command, the arm's
+//! pose, the latest tactile map with its fit.
+
+use cablecell::orchestrator::{Command, Runner};
+use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS};
+
+use super::super::run::{print_outcome, print_transition};
+use super::map::draw_map;
+use super::session::Loaded;
+
+/// In a final state with nothing left to carry out.
+pub(super) fn run_over(runner: &Runner) -> bool {
+    runner.state().is_final() && runner.pending_command().is_none()
+}
+
+pub(super) fn next_command(runner: &Runner) -> String {
+    runner
+        .pending_command()
+        .map(|command| format!("; next: {}", command_name(command)))
+        .unwrap_or_default()
+}
+
+fn command_name(command: &Command) -> &'static str {
+    match command {
+        Command::Prepare { .. } => "prepare (reference and open the gripper, read the bias frames)",
+        Command::Detect => "detect the cable",
+        Command::MoveTo { .. } => "move to the standoff pose",
+        Command::Grasp { .. } => "descend and grasp",
+        Command::ReadTactile { .. } => "read the tactile frames",
+        Command::Regrasp { .. } => "release, move by T_corr, grasp again",
+        Command::SafeStop { .. } => "safe stop (stop the arm, open the jaws)",
+    }
+}
+
+pub(super) fn show_state(loaded: &Loaded) {
+    let runner = loaded.driver.runner();
+    let record = runner.record();
+    println!(
+        "state {} at {:.3} s{}",
+        runner.state().name(),
+        runner.now_s(),
+        next_command(runner)
+    );
+    let first = record.transitions.len().saturating_sub(8);
+    if first > 0 {
+        println!("  ({first} earlier transitions)");
+    }
+    for (i, t) in record.transitions.iter().enumerate().skip(first) {
+        print_transition(record, i, t);
+    }
+    if let Some(entered) = record.transitions.last() {
+        println!(
+            "  in {} for {:.3} s",
+            entered.to,
+            runner.now_s() - entered.t_s
+        );
+    }
+    if record.outcome.is_some() {
+        print_outcome(record);
+    }
+}
+
+pub(super) fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
+    let base_from_tcp = loaded
+        .driver
+        .base_from_tcp()
+        .map_err(|e| format!("the arm did not answer: {e}"))?;
+    println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
+    if let Some(grasp) = loaded.driver.runner().record().grasps.last() {
+        println!(
+            "at the latest grasp ({}): {}",
+            attempt_name(grasp.attempt),
+            pose_text(&grasp.base_from_tcp)
+        );
+    }
+    Ok(())
+}
+
+fn pose_text(pose: &nalgebra::Isometry3<f64>) -> String {
+    let t = pose.translation.vector;
+    let (roll, pitch, yaw) = pose.rotation.euler_angles();
+    format!(
+        "x {:+9.3} y {:+9.3} z {:+9.3} mm  roll {:+8.3} pitch {:+8.3} yaw {:+8.3} deg",
+        t.x,
+        t.y,
+        t.z,
+        roll.to_degrees(),
+        pitch.to_degrees(),
+        yaw.to_degrees()
+    )
+}
+
+fn attempt_name(attempt: u32) -> String {
+    match attempt {
+        0 => "trial grasp".into(),
+        k => format!("regrasp {k}"),
+    }
+}
+
+pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
+    let record = loaded.driver.runner().record();
+    let grasp = record
+        .grasps
+        .last()
+        .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
+    let pitch_mm = loaded.driver.runner().plan().fit.pitch_mm;
+    let line = grasp.fit.as_ref().map(Estimate::line);
+    let centroids: Vec<(f64, f64)> = match &grasp.fit {
+        Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
+        _ => Vec::new(),
+    };
+    println!(
+        "{} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
+        attempt_name(grasp.attempt),
+        grasp.t_s,
+        grasp.map.peak_dv_v()
+    );
+    for row in draw_map(&grasp.map, pitch_mm, line, &centroids) {
+        println!("  |{row}|");
+    }
+    println!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
+    for row in 0..TAXEL_ROWS {
+        let values: Vec<String> = (0..TAXEL_COLS)
+            .map(|col| format!("{:7.1}", grasp.map.dv_v[row][col] * 1000.0))
+            .collect();
+        println!("  {}", values.join(""));
+    }
+    match (&grasp.fit, line) {
+        (Some(fit), Some(line)) => {
+            let name = match fit {
+                Estimate::Centroids(_) => "centroids",
+                Estimate::Ridge(_) => "ridge",
+                Estimate::Oracle { .. } => "oracle",
+            };
+            println!(
+                "fitted line ({name}): n {:+.3} mm, α {:+.4} rad",
+                line.offset_mm, line.alpha_rad
+            );
+        }
+        _ => println!("no fitted line: the fit failed"),
+    }
+    if let Some(truth) = &grasp.truth {
+        println!(
+            "true line:            n {:+.3} mm, α {:+.4} rad",
+            truth.line.offset_mm, truth.line.alpha_rad
+        );
+    }
+    Ok(())
+}
