@@ -46,9 +46,10 @@ impl RunRecord {
         }
     }
 
-    /// The state the machine is in, as recorded.
-    pub fn current_state(&self) -> &'static str {
-        self.transitions.last().map_or("idle", |t| t.to)
+    /// The state the machine entered last, as recorded; `None` before
+    /// its first transition.
+    pub fn current_state(&self) -> Option<&'static str> {
+        self.transitions.last().map(|t| t.to)
     }
 
     /// How long each visited state lasted; the last one is still open.

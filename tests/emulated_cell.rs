@@ -63,7 +63,7 @@ fn run(
         .step()
         .expect("an unrecorded run has no recording to fail")
     {
-        if runner.record().current_state() == switch_in
+        if runner.record().current_state() == Some(switch_in)
             && let Some(switch) = switch.take()
         {
             switch(&switches);
@@ -77,7 +77,7 @@ fn run(
 /// fault must leave: the fault state, its safe stop done, and the record
 /// of every transition up to it.
 fn fault_of(record: &RunRecord) -> (&'static str, Option<DeviceKind>, String) {
-    assert_eq!(record.current_state(), "fault");
+    assert_eq!(record.current_state(), Some("fault"));
     let Some(RunOutcome::Fault {
         state,
         device,

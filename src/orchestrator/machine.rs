@@ -469,7 +469,10 @@ fn fault(
     error: String,
 ) -> Outcome<State> {
     context.record.outcome = Some(RunOutcome::Fault {
-        state: context.record.current_state(),
+        state: context
+            .record
+            .current_state()
+            .unwrap_or(State::idle().name()),
         device,
         error,
     });
