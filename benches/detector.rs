@@ -6,14 +6,14 @@
 use std::hint::black_box;
 use std::path::Path;
 
-use cablecell::cell::Cell;
+use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn detector(c: &mut Criterion) {
     let file = load_cell(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/cell.sim.toml"))
         .expect("the shipped simulated cell");
-    let mut cell = Cell::build(&file, 1).expect("the simulated cell builds");
+    let mut cell = CellDevices::build(&file, 1).expect("the simulated cell builds");
     // The first detection loads the network.
     cell.detector
         .detect(cell.camera.as_mut())

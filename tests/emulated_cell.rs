@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use cablecell::cell::Cell;
+use cablecell::cell::CellDevices;
 use cablecell::cell::CellFile;
 use cablecell::cell::load_cell;
 use cablecell::hw::DeviceKind;
@@ -43,7 +43,7 @@ fn run(
     switch_in: &str,
     switch: impl FnOnce(&Switches),
 ) -> (RunRecord, SharedWorld) {
-    let cell = Cell::build(cell_file, SEED).expect("the emulated cell starts");
+    let cell = CellDevices::build(cell_file, SEED).expect("the emulated cell starts");
     let world = cell.world();
     let switches = Switches {
         gripper: cell

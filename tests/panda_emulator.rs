@@ -52,7 +52,7 @@ mod emulated {
     use std::sync::{Mutex, MutexGuard};
 
     use approx::assert_relative_eq;
-    use cablecell::cell::Cell;
+    use cablecell::cell::CellDevices;
     use cablecell::hw::DeviceError;
     use cablecell::hw::arm::panda::panda_limits;
     use cablecell::hw::arm::panda_emulator::PandaEmulator;
@@ -246,7 +246,7 @@ mod emulated {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "127.0.0.7"));
         let file = cablecell::cell::load_cell(&path).expect("cell file");
-        let mut cell = Cell::build(&file, 1).expect("the cell builds");
+        let mut cell = CellDevices::build(&file, 1).expect("the cell builds");
         let error = cell
             .arm
             .move_linear(&start_pose(), file.arm.max_speed_mm_s * 2.0)
@@ -262,7 +262,7 @@ mod emulated {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = cell_with_arm(&dir, &PANDA_BACKEND.replace("ADDRESS", "127.0.0.8"));
         let file = cablecell::cell::load_cell(&path).expect("cell file");
-        let mut cell = Cell::build(&file, 1).expect("the cell builds");
+        let mut cell = CellDevices::build(&file, 1).expect("the cell builds");
         let pose = cell.arm.base_from_tcp().expect("state");
         assert_relative_eq!(pose, start_pose() * ee_from_tcp(), epsilon = 1e-9);
         let target = Translation3::new(5.0, 0.0, 0.0) * pose;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
-use cablecell::cell::Cell;
+use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell;
 use cablecell::hw::emulator::PtyEmulator;
 use cablecell::hw::gripper::config::GripperBackend;
@@ -95,7 +95,7 @@ fn the_real_backends_open_their_ports_and_speak_through_the_drivers() {
     );
     let dir = tempfile::tempdir().expect("scratch");
     let file = load_cell(&write(dir.path(), &text)).expect("a cell with real backends");
-    let mut cell = Cell::build(&file, 1).expect("the ports open");
+    let mut cell = CellDevices::build(&file, 1).expect("the ports open");
     cell.gripper.reference().expect("reference");
     cell.gripper.move_to(20.0).expect("open");
     assert!(matches!(
@@ -121,7 +121,7 @@ fn a_port_that_is_not_there_is_named_and_nothing_runs() {
     let dir = tempfile::tempdir().expect("scratch");
     let path = write(dir.path(), &text);
     let file = load_cell(&path).expect("a valid cell file");
-    match Cell::build(&file, 1) {
+    match CellDevices::build(&file, 1) {
         Err(DeviceError::Disconnected {
             device,
             port,

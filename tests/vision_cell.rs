@@ -5,7 +5,7 @@
 
 mod common;
 
-use cablecell::cell::Cell;
+use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell;
 use cablecell::hw::DeviceError;
 use cablecell::hw::camera::config::{CameraBackend, CameraSource};
@@ -40,7 +40,7 @@ fn the_detected_grasp_frame_is_the_cable_s_midpoint_frame() {
     let along = Vector3::new(tilt_rad.cos(), 0.0, tilt_rad.sin());
     let up = Vector3::new(-tilt_rad.sin(), 0.0, tilt_rad.cos());
     for seed in 0..5 {
-        let mut cell = Cell::build(&file, seed).expect("the simulated cell builds");
+        let mut cell = CellDevices::build(&file, seed).expect("the simulated cell builds");
         let found = cell.detector.detect(cell.camera.as_mut()).expect("detect");
         // Clutter may show up too, after the cable.
         assert!(
@@ -271,7 +271,7 @@ fn a_video_camera_plays_its_frames_then_says_it_has_no_more() {
 #[test]
 fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
     let file = load_cell(&root().join("config/cell.sim.toml")).expect("cell");
-    let mut cell = Cell::build(&file, 1).expect("the simulated cell builds");
+    let mut cell = CellDevices::build(&file, 1).expect("the simulated cell builds");
     let image = cell.camera.capture().expect("capture");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("scene.png");

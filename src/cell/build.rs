@@ -38,7 +38,9 @@ use crate::sim::tactile_model::TactileModel;
 use crate::sim::world::{SharedWorld, SimWorld, lock};
 use crate::sim::{Stream, rng};
 
-pub struct Cell {
+/// The devices a cell file names, ready to use, with the simulated world
+/// they share when there is one.
+pub struct CellDevices {
     pub name: String,
     pub arm: Box<dyn Arm>,
     pub gripper: Box<dyn Gripper>,
@@ -84,7 +86,7 @@ impl Emulators {
     }
 }
 
-impl Cell {
+impl CellDevices {
     /// Builds the cell of `file`, `seed` seeding every simulated source;
     /// opens the real devices' ports and starts the emulators.
     pub fn build(file: &CellFile, seed: u64) -> Result<Self, DeviceError> {

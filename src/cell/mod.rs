@@ -5,6 +5,6 @@ mod build;
 pub mod file;
 pub mod load;
 
-pub use build::{Cell, Emulators};
+pub use build::{CellDevices, Emulators};
 pub use file::CellFile;
 pub use load::{load_cell, load_cell_uncalibrated};

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use cablecell::cell::Cell;
+use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell_uncalibrated;
 use cablecell::hw::camera::config::CameraBackend;
 use cablecell::perception::vision::calibration::{CameraCalibration, MarkerView, calibrate_views};
@@ -33,7 +33,7 @@ pub fn calibrate_camera(cell_path: &Path, seed: u64, speed_mm_s: f64, dry_run: b
         );
         return Status::BadInput;
     }
-    let mut cell = match Cell::build(&file, seed) {
+    let mut cell = match CellDevices::build(&file, seed) {
         Ok(cell) => cell,
         Err(error) => {
             eprintln!("error: {error}");

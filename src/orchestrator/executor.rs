@@ -4,13 +4,13 @@
 use nalgebra::{Isometry3, Translation3};
 
 use super::command::{Command, Event};
-use crate::cell::Cell;
+use crate::cell::CellDevices;
 use crate::hw::DeviceError;
 use crate::hw::tactile::TactileFrame;
 
 /// Runs `command` and answers with its event; a device error becomes
 /// `Event::DeviceFault`.
-pub fn execute(cell: &mut Cell, command: &Command) -> Event {
+pub fn execute(cell: &mut CellDevices, command: &Command) -> Event {
     let result = match command {
         Command::Prepare {
             open_mm,
@@ -52,25 +52,25 @@ pub fn execute(cell: &mut Cell, command: &Command) -> Event {
     result.unwrap_or_else(Event::DeviceFault)
 }
 
-fn prepare(cell: &mut Cell, open_mm: f64, bias_frames: usize) -> Result<Event, DeviceError> {
+fn prepare(cell: &mut CellDevices, open_mm: f64, bias_frames: usize) -> Result<Event, DeviceError> {
     cell.gripper.reference()?;
     cell.gripper.move_to(open_mm)?;
     read_tactile(cell, bias_frames)
 }
 
-fn read_tactile(cell: &mut Cell, count: usize) -> Result<Event, DeviceError> {
+fn read_tactile(cell: &mut CellDevices, count: usize) -> Result<Event, DeviceError> {
     Ok(Event::Tactile {
         frames: read_frames(cell, count)?,
         true_line: cell.cable_on_pad_truth(),
     })
 }
 
-fn read_frames(cell: &mut Cell, count: usize) -> Result<Vec<TactileFrame>, DeviceError> {
+fn read_frames(cell: &mut CellDevices, count: usize) -> Result<Vec<TactileFrame>, DeviceError> {
     (0..count).map(|_| cell.tactile.read()).collect()
 }
 
 fn grasp(
-    cell: &mut Cell,
+    cell: &mut CellDevices,
     base_from_tcp: &Isometry3<f64>,
     speed_mm_s: f64,
     grip_current_a: f64,
@@ -86,7 +86,7 @@ fn grasp(
 /// Release, back off along the approach axis, move over the corrected
 /// pose, and grasp again.
 fn regrasp(
-    cell: &mut Cell,
+    cell: &mut CellDevices,
     base_from_tcp: &Isometry3<f64>,
     speed_mm_s: f64,
     open_mm: f64,
@@ -104,7 +104,7 @@ fn regrasp(
 }
 
 /// Best effort: every device is asked, whatever the others answer.
-fn safe_stop(cell: &mut Cell, open_mm: f64) -> Event {
+fn safe_stop(cell: &mut CellDevices, open_mm: f64) -> Event {
     let problems = [
         cell.arm.stop(),
         cell.gripper.stop(),

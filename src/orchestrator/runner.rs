@@ -13,7 +13,7 @@ use super::command::{Command, Event};
 use super::executor::execute;
 use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
-use crate::cell::Cell;
+use crate::cell::CellDevices;
 use crate::cell::CellFile;
 use crate::detector::Detections;
 use crate::hw::DeviceError;
@@ -25,7 +25,7 @@ use crate::task::TaskFile;
 pub struct Runner {
     machine: InitializedStateMachine<GraspTask>,
     context: Context,
-    cell: Cell,
+    cell: CellDevices,
     recording: Option<Recording>,
 }
 
@@ -39,7 +39,7 @@ struct Recording {
 }
 
 impl Runner {
-    pub fn new(plan: Plan, cell: Cell, task_name: &str, seed: u64) -> Self {
+    pub fn new(plan: Plan, cell: CellDevices, task_name: &str, seed: u64) -> Self {
         let record = RunRecord::new(task_name, &cell.name, seed, plan.target, plan.tolerance);
         let mut context = Context::new(plan, record);
         let machine = GraspTask::new()
@@ -59,7 +59,7 @@ impl Runner {
         let plan = Plan::new(task, cell_file);
         Ok(Self::new(
             plan,
-            Cell::build(cell_file, seed)?,
+            CellDevices::build(cell_file, seed)?,
             &task.task.name,
             seed,
         ))
