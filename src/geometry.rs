@@ -18,31 +18,34 @@ use serde::{Deserialize, Serialize};
 /// The paper fits `y = m x + n`; a slope blows up for a cable lying along y,
 /// so cablecell keeps the line as its direction angle `alpha_rad` in
 /// (-π/2, π/2] (the paper's `atan m`) and its signed perpendicular distance
-/// `offset_mm` from the sensor's origin along the normal
-/// (-sin α, cos α). For a cable near the x-axis `offset_mm` is the paper's
-/// `n` (exactly `n cos α`).
+/// `n_mm` from the sensor's origin along the normal (-sin α, cos α):
+/// cablecell's n, which for a cable near the x-axis is the paper's `n`
+/// (exactly `n cos α`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LineInSensor {
     pub alpha_rad: f64,
-    pub offset_mm: f64,
+    /// Written `offset_mm` in the JSON outputs and recordings, which keep
+    /// their field names.
+    #[serde(rename = "offset_mm")]
+    pub n_mm: f64,
 }
 
 impl LineInSensor {
     /// The line of direction angle `alpha_rad` (any value, taken modulo π)
-    /// at signed distance `offset_mm` along the normal (-sin α, cos α).
-    pub fn new(alpha_rad: f64, offset_mm: f64) -> Self {
+    /// at signed distance `n_mm` along the normal (-sin α, cos α).
+    pub fn new(alpha_rad: f64, n_mm: f64) -> Self {
         // Subtract k half-turns to land in (-π/2, π/2]; an odd k reverses
         // the direction, and with it the normal and the offset's sign.
         let k = ((alpha_rad - FRAC_PI_2) / PI).ceil();
         let alpha = alpha_rad - k * PI;
-        let offset = if k.rem_euclid(2.0) == 1.0 {
-            -offset_mm
+        let n_mm = if k.rem_euclid(2.0) == 1.0 {
+            -n_mm
         } else {
-            offset_mm
+            n_mm
         };
         Self {
             alpha_rad: alpha,
-            offset_mm: offset,
+            n_mm,
         }
     }
 
@@ -58,7 +61,7 @@ impl LineInSensor {
     /// for a line too close to the y-axis to have them.
     pub fn slope_intercept(&self) -> Option<(f64, f64)> {
         let cos = self.alpha_rad.cos();
-        (cos.abs() > 1e-9).then(|| (self.alpha_rad.tan(), self.offset_mm / cos))
+        (cos.abs() > 1e-9).then(|| (self.alpha_rad.tan(), self.n_mm / cos))
     }
 
     /// Unit normal (-sin α, cos α) along which `offset_mm` is measured.
@@ -68,13 +71,13 @@ impl LineInSensor {
 
     /// Signed distance of a point from the line, along the normal.
     pub fn distance_mm(&self, point_mm: Vector2<f64>) -> f64 {
-        self.normal().dot(&point_mm) - self.offset_mm
+        self.normal().dot(&point_mm) - self.n_mm
     }
 
     /// A frame on the line: origin at the foot of the perpendicular from the
     /// sensor's origin, x along the line.
     pub fn sensor_from_line(&self) -> Isometry2<f64> {
-        let foot = self.normal() * self.offset_mm;
+        let foot = self.normal() * self.n_mm;
         Isometry2::new(foot, self.alpha_rad)
     }
 
@@ -82,15 +85,11 @@ impl LineInSensor {
     /// (-π/2, π/2], and offset difference measured along the target's
     /// normal (near ±π/2 the two normals can point opposite ways).
     pub fn error_to(&self, target: &LineInSensor) -> PoseError {
-        let seen_from_target = LineInSensor::new(self.alpha_rad - target.alpha_rad, self.offset_mm);
-        let same_normal = seen_from_target.offset_mm == self.offset_mm;
-        let offset_mm = if same_normal {
-            self.offset_mm
-        } else {
-            -self.offset_mm
-        };
+        let seen_from_target = LineInSensor::new(self.alpha_rad - target.alpha_rad, self.n_mm);
+        let same_normal = seen_from_target.n_mm == self.n_mm;
+        let offset_mm = if same_normal { self.n_mm } else { -self.n_mm };
         PoseError {
-            n_mm: offset_mm - target.offset_mm,
+            n_mm: offset_mm - target.n_mm,
             alpha_rad: seen_from_target.alpha_rad,
         }
     }
@@ -177,10 +176,10 @@ mod tests {
     fn new_normalises_angle_and_flips_offset() {
         let line = LineInSensor::new(PI - 0.1, 2.0);
         assert_relative_eq!(line.alpha_rad, -0.1, epsilon = 1e-12);
-        assert_relative_eq!(line.offset_mm, -2.0, epsilon = 1e-12);
+        assert_relative_eq!(line.n_mm, -2.0, epsilon = 1e-12);
         let vertical = LineInSensor::new(-FRAC_PI_2, 1.0);
         assert_relative_eq!(vertical.alpha_rad, FRAC_PI_2, epsilon = 1e-12);
-        assert_relative_eq!(vertical.offset_mm, -1.0, epsilon = 1e-12);
+        assert_relative_eq!(vertical.n_mm, -1.0, epsilon = 1e-12);
     }
 
     #[test]
@@ -191,10 +190,10 @@ mod tests {
         let (m_fit, n_fit) = line.slope_intercept().unwrap();
         assert_relative_eq!(m_fit, m, epsilon = 1e-12);
         assert_relative_eq!(n_fit, n, epsilon = 1e-12);
-        assert_relative_eq!(line.offset_mm, n * m.atan().cos(), epsilon = 1e-12);
+        assert_relative_eq!(line.n_mm, n * m.atan().cos(), epsilon = 1e-12);
         let vertical = LineInSensor::through(Vector2::new(2.0, 0.0), Vector2::new(0.0, 1.0));
         assert!(vertical.slope_intercept().is_none());
-        assert_relative_eq!(vertical.offset_mm, -2.0, epsilon = 1e-12);
+        assert_relative_eq!(vertical.n_mm, -2.0, epsilon = 1e-12);
     }
 
     #[test]

@@ -145,16 +145,14 @@ fn replay_fits_the_recorded_frames_again() {
         assert_eq!(refit.frames, 10);
         let line = refit.line.as_ref().unwrap();
         let expected = grasp.fit.as_ref().unwrap().line();
-        assert!((line.offset_mm - expected.offset_mm).abs() < 1e-9);
+        assert!((line.n_mm - expected.n_mm).abs() < 1e-9);
         assert!((line.alpha_rad - expected.alpha_rad).abs() < 1e-9);
         assert_eq!(refit.truth, grasp.truth.as_ref().map(|t| t.line));
     }
     // Another estimator on the same frames answers differently.
     let ridge = replay.refit(Estimator::Ridge);
     assert_eq!(ridge.len(), again.len());
-    let moved = (ridge[0].line.as_ref().unwrap().offset_mm
-        - again[0].line.as_ref().unwrap().offset_mm)
-        .abs();
+    let moved = (ridge[0].line.as_ref().unwrap().n_mm - again[0].line.as_ref().unwrap().n_mm).abs();
     assert!(moved > 1e-6, "ridge gave the centroids' answer");
 
     let output = common::cablecell(&["replay", path.to_str().unwrap(), "--estimator", "ridge"]);

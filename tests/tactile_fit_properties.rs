@@ -62,12 +62,8 @@ fn rotate_quarter(map: &TactileMap) -> TactileMap {
 fn line_error(fit: &LineInSensor, truth: &LineInSensor) -> (f64, f64) {
     let d_alpha = LineInSensor::new(fit.alpha_rad - truth.alpha_rad, 0.0).alpha_rad;
     let same_side = fit.normal().dot(&truth.normal()) >= 0.0;
-    let truth_offset = if same_side {
-        truth.offset_mm
-    } else {
-        -truth.offset_mm
-    };
-    (d_alpha, fit.offset_mm - truth_offset)
+    let truth_offset = if same_side { truth.n_mm } else { -truth.n_mm };
+    (d_alpha, fit.n_mm - truth_offset)
 }
 
 fn fit_default(map: &TactileMap) -> Result<WireFit, FitError> {
@@ -76,7 +72,7 @@ fn fit_default(map: &TactileMap) -> Result<WireFit, FitError> {
 
 fn assert_finite(fit: &WireFit) {
     let half_pad_mm = 2.0 * PITCH;
-    let mut numbers = vec![fit.h_v, fit.v_v, fit.peak_dv_v, fit.line.offset_mm];
+    let mut numbers = vec![fit.h_v, fit.v_v, fit.peak_dv_v, fit.line.n_mm];
     numbers.extend(fit.slope_m);
     numbers.extend(fit.intercept_n_mm);
     numbers.extend(fit.quadratic.iter().flat_map(|q| [q.a, q.b, q.c]));
@@ -163,7 +159,7 @@ proptest! {
         if (fit.h_v - fit.v_v).abs() > 1e-12 {
             prop_assert_ne!(fit.direction, turned.direction);
         }
-        let expected = LineInSensor::new(fit.line.alpha_rad + FRAC_PI_2, fit.line.offset_mm);
+        let expected = LineInSensor::new(fit.line.alpha_rad + FRAC_PI_2, fit.line.n_mm);
         let (d_alpha, d_offset) = line_error(&turned.line, &expected);
         prop_assert!(d_alpha.abs() <= 1e-9, "d_alpha {d_alpha}");
         prop_assert!(d_offset.abs() <= 1e-9, "d_offset {d_offset}");
@@ -186,8 +182,8 @@ proptest! {
         let (_, err_before) = line_error(&fit_before.line, &before);
         let (_, err_after) = line_error(&fit_after.line, &after);
         // Along the true normal, which both share; `new` may have flipped it.
-        let moved = (err_after + after.offset_mm) - (err_before + before.offset_mm);
-        prop_assert!((moved - (after.offset_mm - before.offset_mm)).abs() <= 2.0 * WORST_OFFSET_MM);
+        let moved = (err_after + after.n_mm) - (err_before + before.n_mm);
+        prop_assert!((moved - (after.n_mm - before.n_mm)).abs() <= 2.0 * WORST_OFFSET_MM);
     }
 
     #[test]
@@ -203,8 +199,8 @@ proptest! {
         let fit_after = fit_default(&render_line(after, amplitude)).unwrap();
         let (_, err_before) = line_error(&fit_before.line, &before);
         let (_, err_after) = line_error(&fit_after.line, &after);
-        let moved = (err_after + after.offset_mm) - (err_before + before.offset_mm);
-        prop_assert!((moved - (after.offset_mm - before.offset_mm)).abs() <= 2.0 * CENTRED_OFFSET_MM);
+        let moved = (err_after + after.n_mm) - (err_before + before.n_mm);
+        prop_assert!((moved - (after.n_mm - before.n_mm)).abs() <= 2.0 * CENTRED_OFFSET_MM);
     }
 
     #[test]

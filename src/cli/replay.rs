@@ -127,7 +127,7 @@ fn print_refit(refit: &Refit) {
         k => format!("regrasp {k}"),
     };
     let line_text =
-        |line: &LineInSensor| format!("n {:+7.3} mm  α {:+.4} rad", line.offset_mm, line.alpha_rad);
+        |line: &LineInSensor| format!("n {:+7.3} mm  α {:+.4} rad", line.n_mm, line.alpha_rad);
     match &refit.line {
         Ok(line) => print!("{name:>13}  now      {}", line_text(line)),
         Err(error) => print!("{name:>13}  now      no estimate: {error}"),

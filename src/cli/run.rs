@@ -168,7 +168,7 @@ pub(super) fn print_grasp(grasp: &GraspRecord) {
     match (&grasp.fit, &grasp.estimated_error) {
         (Some(fit), Some(error)) => println!(
             "{name:>13}  estimate n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
-            fit.line().offset_mm,
+            fit.line().n_mm,
             fit.line().alpha_rad,
             error.n_mm,
             error.alpha_rad
@@ -181,7 +181,7 @@ pub(super) fn print_grasp(grasp: &GraspRecord) {
     if let Some(truth) = &grasp.truth {
         println!(
             "{:>13}  true     n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
-            "", truth.line.offset_mm, truth.line.alpha_rad, truth.error.n_mm, truth.error.alpha_rad
+            "", truth.line.n_mm, truth.line.alpha_rad, truth.error.n_mm, truth.error.alpha_rad
         );
     }
 }

@@ -179,11 +179,11 @@ impl Recorder {
             estimator,
             map_dv_v: row_major(&grasp.map),
             peak_dv_v: grasp.map.peak_dv_v(),
-            n_mm: line.map(|l| l.offset_mm),
+            n_mm: line.map(|l| l.n_mm),
             alpha_rad: line.map(|l| l.alpha_rad),
             error_n_mm: grasp.estimated_error.map(|e| e.n_mm),
             error_alpha_rad: grasp.estimated_error.map(|e| e.alpha_rad),
-            true_n_mm: grasp.truth.as_ref().map(|t| t.line.offset_mm),
+            true_n_mm: grasp.truth.as_ref().map(|t| t.line.n_mm),
             true_alpha_rad: grasp.truth.as_ref().map(|t| t.line.alpha_rad),
             centroids_mm,
         };

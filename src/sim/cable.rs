@@ -98,7 +98,7 @@ impl CableModel {
     pub fn settled(&self, caught: &LineInSensor) -> LineInSensor {
         LineInSensor::new(
             caught.alpha_rad * (1.0 - self.turn.settle),
-            caught.offset_mm * (1.0 - self.shift.settle),
+            caught.n_mm * (1.0 - self.shift.settle),
         )
     }
 
@@ -108,7 +108,7 @@ impl CableModel {
     pub fn released(&self, caught: &LineInSensor, held: &LineInSensor) -> LineInSensor {
         LineInSensor::new(
             held.alpha_rad + self.turn.spring_back * (caught.alpha_rad - held.alpha_rad),
-            held.offset_mm + self.shift.spring_back * (caught.offset_mm - held.offset_mm),
+            held.n_mm + self.shift.spring_back * (caught.n_mm - held.n_mm),
         )
     }
 }
@@ -182,12 +182,8 @@ pub(crate) mod tests {
             0.3 * (1.0 - cable.turn.settle),
             epsilon = 1e-12
         );
-        assert_relative_eq!(
-            held.offset_mm,
-            4.0 * (1.0 - cable.shift.settle),
-            epsilon = 1e-12
-        );
-        assert!(held.offset_mm < 2.5, "a limp cable's shift settles by half");
+        assert_relative_eq!(held.n_mm, 4.0 * (1.0 - cable.shift.settle), epsilon = 1e-12);
+        assert!(held.n_mm < 2.5, "a limp cable's shift settles by half");
     }
 
     #[test]
@@ -201,11 +197,7 @@ pub(crate) mod tests {
             0.2 + 0.1 * cable.turn.spring_back,
             epsilon = 1e-12
         );
-        assert_relative_eq!(
-            free.offset_mm,
-            3.0 + cable.shift.spring_back,
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(free.n_mm, 3.0 + cable.shift.spring_back, epsilon = 1e-12);
     }
 
     #[test]

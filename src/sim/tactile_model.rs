@@ -153,7 +153,7 @@ impl TactileModel {
             return [0.0; TAXEL_COUNT];
         };
         let along = contact.line.sensor_from_line().rotation * Vector2::x();
-        let foot = contact.line.normal() * contact.line.offset_mm;
+        let foot = contact.line.normal() * contact.line.n_mm;
         let steps = ((end - start) / ALONG_STEP_MM).ceil().max(1.0) as usize;
         let step_mm = (end - start) / steps as f64;
         // Midpoints of the steps, with the load each carries.
@@ -181,7 +181,7 @@ impl TactileModel {
 /// its perpendicular; `None` if the line misses the square.
 fn clip_to_square(line: &LineInSensor, half_side_mm: f64) -> Option<(f64, f64)> {
     let along = line.sensor_from_line().rotation * Vector2::x();
-    let foot = line.normal() * line.offset_mm;
+    let foot = line.normal() * line.n_mm;
     let (mut start, mut end) = (f64::NEG_INFINITY, f64::INFINITY);
     for axis in 0..2 {
         if along[axis].abs() < 1e-12 {

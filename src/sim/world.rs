@@ -182,7 +182,7 @@ impl SimWorld {
     pub fn close_on_cable(&mut self, squeeze_fraction: f64) -> Option<LineInSensor> {
         let caught = self
             .cable_in_sensor()
-            .filter(|line| line.offset_mm.abs() <= self.capture_half_height_mm)?;
+            .filter(|line| line.n_mm.abs() <= self.capture_half_height_mm)?;
         let caught_line_from_cable = planar_to_spatial(&caught.sensor_from_line()).inverse()
             * self.base_from_sensor().inverse()
             * self.base_from_cable;
@@ -273,7 +273,7 @@ mod tests {
         world.base_from_tcp = over(&world, world.base_from_cable);
         let line = world.close_on_cable(0.05).unwrap();
         assert_relative_eq!(line.alpha_rad, 0.0, epsilon = 1e-9);
-        assert_relative_eq!(line.offset_mm, 0.0, epsilon = 1e-9);
+        assert_relative_eq!(line.n_mm, 0.0, epsilon = 1e-9);
     }
 
     #[test]
@@ -286,7 +286,7 @@ mod tests {
         world.base_from_tcp = Translation3::new(0.0, 0.0, -2.0) * over(&world, level);
         let line = world.close_on_cable(0.05).unwrap();
         assert_relative_eq!(line.alpha_rad, 0.2, epsilon = 1e-9);
-        assert_relative_eq!(line.offset_mm, 2.0 * 0.2_f64.cos(), epsilon = 1e-9);
+        assert_relative_eq!(line.n_mm, 2.0 * 0.2_f64.cos(), epsilon = 1e-9);
     }
 
     #[test]
@@ -311,11 +311,7 @@ mod tests {
         // smaller: to first order in the sag's curvature, the tangent at u,
         // which passes h cos(atan s) above the pad's centre.
         assert_relative_eq!(caught.alpha_rad, slope.atan(), epsilon = 1e-3);
-        assert_relative_eq!(
-            caught.offset_mm,
-            height_mm * slope.atan().cos(),
-            epsilon = 1e-3
-        );
+        assert_relative_eq!(caught.n_mm, height_mm * slope.atan().cos(), epsilon = 1e-3);
         assert!(height_mm > 0.5, "{height_mm}");
     }
 
@@ -330,12 +326,12 @@ mod tests {
         let caught = world.cable_in_sensor().unwrap();
         let held = world.close_on_cable(0.05).unwrap();
         assert_eq!(held, world.cable.settled(&caught));
-        assert!(held.offset_mm.abs() < caught.offset_mm.abs());
+        assert!(held.n_mm.abs() < caught.n_mm.abs());
         world.release();
         let free = world.cable_in_sensor().unwrap();
         let expected = world.cable.released(&caught, &held);
         assert_relative_eq!(free.alpha_rad, expected.alpha_rad, epsilon = 1e-6);
-        assert_relative_eq!(free.offset_mm, expected.offset_mm, epsilon = 1e-6);
+        assert_relative_eq!(free.n_mm, expected.n_mm, epsilon = 1e-6);
         assert!(world.grasp.is_none());
     }
 
@@ -351,7 +347,7 @@ mod tests {
         let held = world.close_on_cable(0.05).unwrap();
         world.release();
         let free = world.cable_in_sensor().unwrap();
-        assert_relative_eq!(free.offset_mm, held.offset_mm, epsilon = 1e-6);
+        assert_relative_eq!(free.n_mm, held.n_mm, epsilon = 1e-6);
         assert_relative_eq!(free.alpha_rad, held.alpha_rad, epsilon = 1e-6);
     }
 }

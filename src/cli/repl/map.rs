@@ -40,7 +40,7 @@ pub(super) fn draw_map(
         let half_extent_mm = 0.5 * (sin.abs() * cell_w_mm + cos.abs() * cell_h_mm);
         for (cy, row) in canvas.iter_mut().enumerate() {
             for (cx, cell) in row.iter_mut().enumerate() {
-                let distance_mm = -sin * x_mm(cx) + cos * y_mm(cy) - line.offset_mm;
+                let distance_mm = -sin * x_mm(cx) + cos * y_mm(cy) - line.n_mm;
                 if distance_mm.abs() <= half_extent_mm {
                     *cell = '*';
                 }

@@ -134,7 +134,7 @@ pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
             };
             println!(
                 "fitted line ({name}): n {:+.3} mm, α {:+.4} rad",
-                line.offset_mm, line.alpha_rad
+                line.n_mm, line.alpha_rad
             );
         }
         _ => println!("no fitted line: the fit failed"),
@@ -142,7 +142,7 @@ pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
     if let Some(truth) = &grasp.truth {
         println!(
             "true line:            n {:+.3} mm, α {:+.4} rad",
-            truth.line.offset_mm, truth.line.alpha_rad
+            truth.line.n_mm, truth.line.alpha_rad
         );
     }
     Ok(())

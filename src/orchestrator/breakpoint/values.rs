@@ -52,11 +52,11 @@ impl RunValues {
         let count = |state| record.transitions.iter().filter(|t| t.to == state).count();
         Self {
             values: [
-                line.map(|l| l.offset_mm),
+                line.map(|l| l.n_mm),
                 line.map(|l| l.alpha_rad),
                 error.map(|e| e.n_mm),
                 error.map(|e| e.alpha_rad),
-                truth.map(|t| t.line.offset_mm),
+                truth.map(|t| t.line.n_mm),
                 truth.map(|t| t.line.alpha_rad),
                 truth.map(|t| t.error.n_mm),
                 truth.map(|t| t.error.alpha_rad),

@@ -462,7 +462,7 @@ mod tests {
             assert_relative_eq!(c.y_mm, 0.0, epsilon = 1e-12);
         }
         assert_relative_eq!(fit.line.alpha_rad, 0.0, epsilon = 1e-12);
-        assert_relative_eq!(fit.line.offset_mm, 0.0, epsilon = 1e-12);
+        assert_relative_eq!(fit.line.n_mm, 0.0, epsilon = 1e-12);
         assert_relative_eq!(fit.slope_m.unwrap(), 0.0, epsilon = 1e-12);
         assert_relative_eq!(fit.intercept_n_mm.unwrap(), 0.0, epsilon = 1e-12);
         let q = fit.quadratic.unwrap();
@@ -495,7 +495,7 @@ mod tests {
             assert_eq!(fit.line.alpha_rad, FRAC_PI_2);
             // The normal at +π/2 is -x; the sampling bias of the grid is
             // below 0.035 mm (see tests/tactile_fit_properties.rs).
-            assert_relative_eq!(fit.line.offset_mm, -x_mm, epsilon = 0.035);
+            assert_relative_eq!(fit.line.n_mm, -x_mm, epsilon = 0.035);
             assert_eq!((fit.slope_m, fit.intercept_n_mm), (None, None));
             for c in &fit.centroids {
                 assert_relative_eq!(c.x_mm, fit.centroids[0].x_mm, epsilon = 1e-12);
@@ -513,12 +513,8 @@ mod tests {
         assert_relative_eq!(fit.line.alpha_rad, 0.0, epsilon = 1e-12);
         // 2 mm sits between rows, where the sampled spread's centroid is
         // 0.013 mm off.
-        assert_relative_eq!(fit.line.offset_mm, 2.0, epsilon = 0.02);
-        assert_relative_eq!(
-            fit.intercept_n_mm.unwrap(),
-            fit.line.offset_mm,
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(fit.line.n_mm, 2.0, epsilon = 0.02);
+        assert_relative_eq!(fit.intercept_n_mm.unwrap(), fit.line.n_mm, epsilon = 1e-12);
     }
 
     #[test]
@@ -705,7 +701,7 @@ mod tests {
         assert_eq!((fit.h_v, fit.v_v), (0.0, 0.0));
         assert_eq!(fit.direction, Direction::Horizontal);
         assert_relative_eq!(fit.line.alpha_rad, 0.0);
-        assert_relative_eq!(fit.line.offset_mm, PITCH);
+        assert_relative_eq!(fit.line.n_mm, PITCH);
         assert_eq!(fit.quadratic, None);
     }
 
@@ -732,7 +728,7 @@ mod tests {
         let clipped_fit = fit_wire(&clipped, &config()).unwrap();
         assert_eq!(clipped_fit.saturated_taxels, 5);
         assert_eq!(clipped_fit.peak_dv_v, 1.5);
-        assert!(clipped_fit.line.offset_mm < fit.line.offset_mm);
+        assert!(clipped_fit.line.n_mm < fit.line.n_mm);
         assert_relative_eq!(clipped_fit.line.alpha_rad, 0.0, epsilon = 1e-12);
     }
 
@@ -762,7 +758,7 @@ mod tests {
         broken.dv_v[4][4] = f64::INFINITY;
         let fit = fit_wire(&broken, &config()).unwrap();
         assert_eq!(fit.non_finite_taxels, 2);
-        assert!(fit.line.alpha_rad.is_finite() && fit.line.offset_mm.is_finite());
+        assert!(fit.line.alpha_rad.is_finite() && fit.line.n_mm.is_finite());
         assert_relative_eq!(fit.peak_dv_v, 1.0);
     }
 

@@ -744,7 +744,7 @@ mod tests {
     fn assert_finite(fit: &RidgeFit) {
         let numbers = [
             fit.line.alpha_rad,
-            fit.line.offset_mm,
+            fit.line.n_mm,
             fit.amplitude_v,
             fit.sigma_mm,
             fit.rms_residual_v,
