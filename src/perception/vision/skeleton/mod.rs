@@ -958,7 +958,7 @@ pub fn paths_from_mask(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::render::fixtures::segment_px;
+    use crate::perception::vision::test_curves::segment_px;
 
     #[test]
     fn a_bridge_across_a_gap_keeps_to_the_arc_either_side() {
