@@ -22,18 +22,23 @@ pub struct GroundTruth {
     pub polylines_px: Vec<Vec<[f64; 2]>>,
 }
 
+/// Reads a ground-truth mask, binarized at half: 0/255.
 fn read_mask(path: &Path) -> Result<Mat, VisionError> {
-    let read_error = |reason: String| VisionError::ReadImage {
+    let bytes = std::fs::read(path).map_err(|source| VisionError::ReadTruth {
         path: path.to_path_buf(),
-        reason,
+        source,
+    })?;
+    let undecodable = |source| VisionError::DecodeTruth {
+        path: path.to_path_buf(),
+        source,
     };
-    let text = path
-        .to_str()
-        .ok_or_else(|| read_error("path is not UTF-8".into()))?;
-    let m = imgcodecs::imread(text, imgcodecs::IMREAD_GRAYSCALE)
-        .map_err(|e| read_error(e.to_string()))?;
+    let m = imgcodecs::imdecode(
+        &core::Vector::from_slice(&bytes),
+        imgcodecs::IMREAD_GRAYSCALE,
+    )
+    .map_err(|e| undecodable(Some(e)))?;
     if m.empty() {
-        return Err(read_error("missing or not a decodable image".into()));
+        return Err(undecodable(None));
     }
     let mut binary = Mat::default();
     opencv::imgproc::threshold(
@@ -137,9 +142,9 @@ impl GroundTruth {
             union
         };
         let txt: PathBuf = dir.join(format!("{stem}.txt"));
-        let text = std::fs::read_to_string(&txt).map_err(|e| VisionError::ReadImage {
+        let text = std::fs::read_to_string(&txt).map_err(|source| VisionError::ReadTruth {
             path: txt.clone(),
-            reason: e.to_string(),
+            source,
         })?;
         let polylines_px = text
             .lines()
