@@ -4,13 +4,17 @@
 use opencv::core::Rect;
 
 use crate::perception::vision::superpixels;
+#[cfg(doc)]
+use {
+    super::MAX_ENLARGEMENT, super::straight_edge::EDGE_SIDES_RATIO, crate::perception::vision::mask,
+};
 
 /// How the cables' mask is made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MaskMethod {
     /// The classical threshold when the background is plain and its mask
-    /// not in doubt (see [`mask::classical_doubt`](crate::perception::vision::mask::classical_doubt)), else the
+    /// not in doubt (see [`mask::classical_doubt`]), else the
     /// network (or, with no network, the classical threshold with a note).
     Auto,
     /// Colour distance from the background, Otsu, morphology.
@@ -38,7 +42,7 @@ pub struct VisionConfig {
     pub mask: MaskMethod,
     pub instances: InstanceMethod,
     /// Images are worked on at this width, a wider one shrunk and a
-    /// narrower one enlarged (by at most [`MAX_ENLARGEMENT`](super::MAX_ENLARGEMENT)), and what is
+    /// narrower one enlarged (by at most [`MAX_ENLARGEMENT`]), and what is
     /// found is mapped back to the image's pixels: the network and the
     /// lengths here were tuned on 640 px wide images, where a wire is
     /// about 6 px across; at a finer camera's resolution they would take
@@ -60,8 +64,8 @@ pub struct VisionConfig {
     /// for cables, and a cable lying loose is never that straight (the
     /// straightest in cables-dev's training photographs bends like a 730 px
     /// arc). On a background plain around each pixel (see
-    /// [`mask::plain_locally`](crate::perception::vision::mask::plain_locally)), such a path is kept when the background is
-    /// alike on its two sides (see [`EDGE_SIDES_RATIO`](super::straight_edge::EDGE_SIDES_RATIO)): an edge has two
+    /// [`mask::plain_locally`]), such a path is kept when the background is
+    /// alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has two
     /// different sides. 0 keeps every path: for a cell whose cable is
     /// held taut.
     pub straight_edge_radius_px: f64,

@@ -6,6 +6,8 @@ use opencv::core::Mat;
 use super::config::MaskMethod;
 use crate::perception::vision::mask::BackgroundStats;
 use crate::perception::vision::spline::BSpline;
+#[cfg(doc)]
+use {super::config::VisionConfig, crate::perception::vision::mask};
 
 /// One cable found in the image, in full-image pixel coordinates (x right,
 /// y down), whatever the region of interest.
@@ -24,7 +26,7 @@ pub struct CableInstance {
     /// Length of the skeleton path the spline was fitted to.
     pub length_px: f64,
     /// This cable's pixels: CV_8U 0/255, the image's size (cables overlap
-    /// at crossings); `None` unless [`VisionConfig::cable_masks`](super::VisionConfig::cable_masks).
+    /// at crossings); `None` unless [`VisionConfig::cable_masks`].
     #[serde(skip)]
     pub mask: Option<Mat>,
 }
@@ -36,18 +38,18 @@ pub struct VisionOutput {
     /// The mask method actually run: `Classical` or `Network`.
     pub mask_used: MaskMethod,
     /// Whether the background was judged plain (see
-    /// [`mask::PLAIN_MIN_FRACTION`](crate::perception::vision::mask::PLAIN_MIN_FRACTION)).
+    /// [`mask::PLAIN_MIN_FRACTION`]).
     pub plain_background: bool,
     /// The background statistics behind that judgement.
     pub background: BackgroundStats,
     /// The union of the cables' masks: CV_8U 0/255, the image's size.
     /// Mask pixels no cable took (scraps, stubs at the border) are not in
-    /// it. `None` unless [`VisionConfig::cable_masks`](super::VisionConfig::cable_masks).
+    /// it. `None` unless [`VisionConfig::cable_masks`].
     pub union_mask: Option<Mat>,
     /// The cables' typical width (mask area over skeleton length).
     pub cable_width_px: f64,
     /// The image's size as worked on over its own (see
-    /// [`VisionConfig::work_width_px`](super::VisionConfig::work_width_px)).
+    /// [`VisionConfig::work_width_px`]).
     pub work_scale: f64,
     /// Milliseconds per stage, in order: "prepare", "mask", "instances",
     /// "spline", and "instance_masks" when the cables' masks are drawn.
@@ -64,10 +66,10 @@ pub struct MaskInstances {
     pub cables: Vec<CableInstance>,
     pub cable_width_px: f64,
     /// Paths dropped as straight edges (see
-    /// [`VisionConfig::straight_edge_radius_px`](super::VisionConfig::straight_edge_radius_px)).
+    /// [`VisionConfig::straight_edge_radius_px`]).
     pub straight_dropped: usize,
     /// Paths dropped as running out of view too short (see
-    /// [`VisionConfig::min_border_cable_length_px`](super::VisionConfig::min_border_cable_length_px)).
+    /// [`VisionConfig::min_border_cable_length_px`]).
     pub border_dropped: usize,
     /// Milliseconds for "instances", "spline", and "instance_masks" when
     /// the cables' masks are drawn.
