@@ -224,7 +224,13 @@ fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<String>> {
                 image,
                 truth,
             }),
-            (image, truth) => errors.extend(image.err().into_iter().chain(truth.err())),
+            (image, truth) => errors.extend(
+                image
+                    .err()
+                    .map(|error| error.to_string())
+                    .into_iter()
+                    .chain(truth.err()),
+            ),
         }
     }
     if errors.is_empty() {

@@ -14,6 +14,8 @@ pub mod pipeline;
 pub mod skeleton;
 pub mod spline;
 pub mod superpixels;
+#[cfg(test)]
+mod test_curves;
 
 pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};
