@@ -8,8 +8,9 @@ mod common;
 
 use common::{cablecell, json_of, text};
 
-use cablecell::sim::render::fixtures::{draw_scene, matte_cable, segment_px};
+use cablecell::perception::vision::curves::segment_px;
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
+use common::scenes::{draw_scene, matte_cable};
 use opencv::core::Vector;
 use opencv::imgcodecs;
 use opencv::prelude::*;

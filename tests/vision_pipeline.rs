@@ -4,15 +4,16 @@
 //! the border, straight edges, the region of interest and the working
 //! width, the choice between the classical mask and the network.
 
+mod common;
+
+use cablecell::perception::vision::curves::{arc_px, segment_px};
 use cablecell::perception::vision::eval::distance_to_polylines;
 use cablecell::perception::vision::{
     InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError, VisionOutput,
     mask,
 };
-use cablecell::sim::render::fixtures::{
-    arc_px, demo_scene, draw_scene, matte_cable, midpoint_px, segment_px,
-};
 use cablecell::sim::render::{Background, CableSpec, RenderedScene};
+use common::scenes::{demo_scene, draw_scene, matte_cable, midpoint_px};
 use opencv::core::{self, Mat, Point, Rect, Scalar, Vector};
 use opencv::imgproc;
 use opencv::prelude::*;

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)] // each test binary uses its own part
 
+pub mod scenes;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

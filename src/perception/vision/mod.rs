@@ -4,6 +4,7 @@
 //! and the grasp frame at its middle.
 
 pub mod calibration;
+pub mod curves;
 pub mod error;
 pub mod eval;
 pub mod grasp_frame;
@@ -14,8 +15,6 @@ pub mod pipeline;
 pub mod skeleton;
 pub mod spline;
 pub mod superpixels;
-#[cfg(test)]
-mod test_curves;
 
 pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};

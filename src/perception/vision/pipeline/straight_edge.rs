@@ -126,7 +126,7 @@ fn sides_alike(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::perception::vision::test_curves::arc_px;
+    use crate::perception::vision::curves::arc_px;
 
     #[test]
     fn an_edge_bends_less_than_the_radius_or_no_more_than_mask_noise() {

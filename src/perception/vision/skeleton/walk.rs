@@ -193,8 +193,8 @@ pub(super) fn cut_at_corners(path: Vec<[f64; 2]>, span_px: f64) -> Vec<Vec<[f64;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::perception::vision::curves::segment_px;
     use crate::perception::vision::paths::polyline_length;
-    use crate::perception::vision::test_curves::segment_px;
 
     #[test]
     fn a_bridge_across_a_gap_keeps_to_the_arc_either_side() {

@@ -1,16 +1,9 @@
-//! Curves for the vision unit tests, points about a pixel apart. The
-//! renderer's fixtures (`sim::render::fixtures`) draw the same curves for
-//! the scenario tests in `tests/`; these are built here so that
-//! `perception` imports nothing from `sim`, a layer above it.
+//! Polylines along simple curves, points about a pixel apart: what the
+//! vision tests and benchmarks draw cables along and check paths against.
 
 /// Points along a circular arc, every pixel or so: centre, radius, start
 /// and end angle (radians, image coordinates: y down).
-pub(crate) fn arc_px(
-    centre: [f64; 2],
-    radius_px: f64,
-    from_rad: f64,
-    to_rad: f64,
-) -> Vec<[f64; 2]> {
+pub fn arc_px(centre: [f64; 2], radius_px: f64, from_rad: f64, to_rad: f64) -> Vec<[f64; 2]> {
     let steps = ((to_rad - from_rad).abs() * radius_px).ceil().max(1.0) as usize;
     (0..=steps)
         .map(|i| {
@@ -24,7 +17,7 @@ pub(crate) fn arc_px(
 }
 
 /// Points along a line segment, every pixel or so.
-pub(crate) fn segment_px(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
+pub fn segment_px(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
     let steps = (to[0] - from[0]).hypot(to[1] - from[1]).ceil().max(1.0) as usize;
     (0..=steps)
         .map(|i| {
