@@ -3,12 +3,10 @@
 //! refused commands, Ctrl-C during `continue`, and leaving.
 
 use std::path::Path;
-use std::process::Command;
 
 mod common;
 
 use cablecell::orchestrator::State;
-use common::root;
 use rexpect::session::{PtySession, spawn_command};
 
 /// The REPL on the regrasp task, seed 3, on the simulated cell with an
@@ -17,12 +15,11 @@ use rexpect::session::{PtySession, spawn_command};
 /// (for the history file).
 fn repl(home: &Path, pace: &str, extra: &[&str]) -> PtySession {
     let cell = common::sim_cell_with_oracle_file(home);
-    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
+    let mut command = common::command();
     command
         .args(["repl", "tasks/regrasp.toml", "--seed", "3", "--pace", pace])
         .args(["--cell", cell.to_str().expect("utf-8")])
         .args(extra)
-        .current_dir(root())
         .env("HOME", home)
         .env("TERM", "xterm")
         .env_remove("RUST_LOG");

@@ -251,7 +251,7 @@ fn detect_finds_the_network_from_any_working_directory() {
         vec![cable([60.0, 120.0], [580.0, 380.0])],
         false,
     );
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    let out = common::command()
         .args(["detect", "elsewhere.jpg", "--mask", "network", "--json"])
         .args(["--straight-edge-radius-px", "0"])
         .current_dir(dir.path())
