@@ -14,6 +14,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::perception::vision::VisionError;
+use camera::ImageError;
 
 /// Which device of the cell, as named in errors and records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -94,6 +95,15 @@ pub enum DeviceError {
         #[source]
         source: SharedError<VisionError>,
     },
+    /// The camera's next image could not be read (a folder camera's file
+    /// missing, unreadable, truncated or not an image); `source` names the
+    /// file and says which.
+    #[error("{device}: {source}")]
+    Image {
+        device: DeviceKind,
+        #[source]
+        source: SharedError<ImageError>,
+    },
     /// A pose outside the cell's workspace box was asked for, and refused
     /// before the device moved: check the task's poses, the detection or
     /// the tactile correction that produced it, or widen the box in the
@@ -145,6 +155,7 @@ impl DeviceError {
             | DeviceError::Garbled { device, .. }
             | DeviceError::Unusable { device, .. }
             | DeviceError::Vision { device, .. }
+            | DeviceError::Image { device, .. }
             | DeviceError::OutsideWorkspace { device, .. }
             | DeviceError::TooFast { device, .. } => *device,
         }
