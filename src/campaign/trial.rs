@@ -11,6 +11,7 @@ use crate::cell::CellFile;
 use crate::detector::config::{DetectorBackend, OracleConfig};
 use crate::geometry::{LineInSensor, PoseError};
 use crate::hw::arm::config::ArmBackend;
+use crate::hw::camera::config::{CameraBackend, OcclusionConfig};
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
 use crate::record::RunOutcome;
@@ -149,6 +150,15 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
             ErrorSource::SpringBack => cell.world.spring_back_fraction = 0.0,
         }
     }
+    // Only a simulated camera has a board to lay over the cable.
+    if let Some(fraction) = policy.occlusion_fraction
+        && let CameraBackend::Sim(camera) = &mut cell.camera.backend
+    {
+        camera
+            .occlusion
+            .get_or_insert_with(OcclusionConfig::default)
+            .hidden_fraction = fraction;
+    }
     (task, cell)
 }
 
@@ -248,5 +258,55 @@ pub fn run_trial(
         cell_time_s: record.transitions.last().map_or(0.0, |t| t.t_s),
         compute_time_s: started.elapsed().as_secs_f64(),
         recording,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::cell::load_cell;
+    use crate::hw::camera::config::SimCameraConfig;
+    use crate::task::load_task;
+
+    fn shipped() -> (TaskFile, CellFile) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let task = load_task(&root.join("tasks/regrasp.toml")).expect("the shipped task");
+        let cell = load_cell(&root.join("config/cell.sim.toml")).expect("the shipped cell");
+        (task, cell)
+    }
+
+    fn policy(extra: &str) -> Policy {
+        toml::from_str(&format!(
+            "name = \"p\"\nestimator = \"ridge\"\nmax_regrasps = 1\n{extra}"
+        ))
+        .expect("a policy")
+    }
+
+    fn camera(cell: &CellFile) -> &SimCameraConfig {
+        match &cell.camera.backend {
+            CameraBackend::Sim(sim) => sim,
+            CameraBackend::Opencv(_) => panic!("the shipped cell's camera is simulated"),
+        }
+    }
+
+    #[test]
+    fn a_policy_s_occlusion_reaches_its_trials_cell_at_the_same_place_for_every_policy() {
+        let (task, cell) = shipped();
+        let (_, untouched) = apply_policy(&policy(""), &task, &cell);
+        assert!(camera(&untouched).occlusion.is_none());
+
+        let seed = trial_seed(1, 3);
+        let position = |fraction: f64| {
+            let policy = policy(&format!("occlusion_fraction = {fraction}"));
+            let (_, cell) = apply_policy(&policy, &task, &cell);
+            let camera = camera(&cell);
+            let occlusion = camera.occlusion.as_ref().expect("an occlusion table");
+            assert_eq!(occlusion.hidden_fraction, fraction);
+            let appearance = camera.appearance(&mut rng(seed, Stream::Camera));
+            appearance.occlusion.board.expect("a board").position
+        };
+        assert_eq!(position(0.4), position(0.7));
     }
 }

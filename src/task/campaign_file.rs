@@ -9,7 +9,7 @@ use super::task_file::Tolerance;
 use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
 use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::schema::validate::{at_least_one, non_negative, non_negative_range};
+use crate::schema::validate::{at_least_one, non_negative, non_negative_range, some_fraction};
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -87,6 +87,11 @@ pub struct Policy {
     /// costs (an error budget). Simulated cells only.
     #[serde(default)]
     pub perfect: Vec<ErrorSource>,
+    /// The share of the cable a board hides from the simulated camera in
+    /// this policy's trials, if not the cell's `hidden_fraction` (0 to 1).
+    /// Simulated cameras only.
+    #[serde(default, deserialize_with = "some_fraction")]
+    pub occlusion_fraction: Option<f64>,
 }
 
 /// A source of error of the simulated cell that a policy can switch off.
