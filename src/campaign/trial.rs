@@ -17,7 +17,7 @@ use crate::perception::tactile::Estimator;
 use crate::record::RunOutcome;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
-use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
+use crate::task::campaign_file::{ErrorSource, Perturbations, Policy, TrialStart};
 
 /// The seed of trial `index`: the same for every policy, and independent
 /// of the order and the thread the trials run in.
@@ -60,16 +60,18 @@ impl Perturbation {
     }
 
     /// The cell of this trial: the base cell with these values set.
-    pub fn apply(&self, cell: &CellFile) -> CellFile {
+    pub fn apply(&self, cell: &CellFile, start: TrialStart) -> CellFile {
         let mut cell = cell.clone();
         // The paper's experiment starts each trial from a chosen offset: an
         // oracle detector sets it, whatever detector the cell has.
-        cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
-            position_noise_mm: 0.0,
-            angle_noise_rad: 0.0,
-            offset_across_mm: self.start_offset_mm,
-            offset_angle_rad: self.start_angle_rad,
-        });
+        if start == TrialStart::Oracle {
+            cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
+                position_noise_mm: 0.0,
+                angle_noise_rad: 0.0,
+                offset_across_mm: self.start_offset_mm,
+                offset_angle_rad: self.start_angle_rad,
+            });
+        }
         if let Some(tactile) = cell.tactile.backend.sim_pad_mut() {
             tactile.noise_fraction = self.sensor_noise_fraction;
         }
@@ -182,7 +184,7 @@ pub fn run_trial(
     let started = Instant::now();
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
-    let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell));
+    let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell, ranges.start));
     let mut runner = match Runner::for_task(&task, &cell, seed) {
         Ok(runner) => runner,
         Err(error) => {

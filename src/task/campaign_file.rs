@@ -67,6 +67,24 @@ pub struct Perturbations {
     /// Range of the tactile noise (fraction of the taxels' swing).
     #[serde(deserialize_with = "non_negative_range")]
     pub sensor_noise_fraction: [f64; 2],
+    /// What finds the cable at each trial's start.
+    #[serde(default)]
+    pub start: TrialStart,
+}
+
+/// What finds the cable at a trial's start.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrialStart {
+    /// An oracle in place of the cell's detector, off by the drawn start
+    /// offset and angle: the paper's experiment, which starts each trial
+    /// from a chosen error.
+    #[default]
+    Oracle,
+    /// The cell's own detector (its camera and the vision pipeline, which
+    /// an occlusion hides from), so each start is as good as it finds; the
+    /// start offset and angle ranges go unused.
+    Detector,
 }
 
 /// An estimator and a regrasp budget.
