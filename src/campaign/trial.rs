@@ -286,6 +286,39 @@ mod tests {
         .expect("a policy")
     }
 
+    #[test]
+    fn a_trial_starts_from_the_oracle_unless_the_campaign_keeps_the_cells_detector() {
+        let (_, cell) = shipped();
+        assert!(matches!(cell.detector.backend, DetectorBackend::Vision(_)));
+        let perturbation = Perturbation {
+            start_offset_mm: 2.0,
+            start_angle_rad: 0.1,
+            cable_diameter_mm: 2.5,
+            cable_stiffness_n_mm2: 60.0,
+            sensor_noise_fraction: 0.02,
+        };
+        match perturbation
+            .apply(&cell, TrialStart::Oracle)
+            .detector
+            .backend
+        {
+            DetectorBackend::Oracle(oracle) => {
+                assert_eq!(
+                    (oracle.offset_across_mm, oracle.offset_angle_rad),
+                    (2.0, 0.1)
+                )
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            perturbation
+                .apply(&cell, TrialStart::Detector)
+                .detector
+                .backend,
+            DetectorBackend::Vision(_)
+        ));
+    }
+
     fn camera(cell: &CellFile) -> &SimCameraConfig {
         match &cell.camera.backend {
             CameraBackend::Sim(sim) => sim,
