@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::task::TaskFile;
+use crate::task::{TaskFile, parse_task};
 
 /// Why a parameter could not be set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -32,7 +32,7 @@ pub struct TaskParams {
 impl TaskParams {
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let text = read(path)?;
-        let task: TaskFile = parse(path, &text)?;
+        let task = parse_task(path, &text)?;
         let mut table: toml::Table = parse(path, &text)?;
         // Optional values with a default are parameters too, at the value
         // the task file's loader gave them.
@@ -99,7 +99,7 @@ impl TaskParams {
             }
         }
         let text = toml::to_string(&table).map_err(|e| invalid(e.to_string()))?;
-        let task = parse::<TaskFile>(&self.path, &text).map_err(|error| match error {
+        let task = parse_task(&self.path, &text).map_err(|error| match error {
             ConfigError::Invalid { message, .. } => invalid(message),
             other => invalid(other.to_string()),
         })?;

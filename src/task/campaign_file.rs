@@ -87,6 +87,10 @@ pub struct Policy {
     /// costs (an error budget). Simulated cells only.
     #[serde(default)]
     pub perfect: Vec<ErrorSource>,
+    /// Search by touch from the task's `[prior]` without looking, its
+    /// mean at the trial's start offset from the true grasp frame.
+    #[serde(default)]
+    pub touch_only: bool,
 }
 
 /// A source of error of the simulated cell that a policy can switch off.
