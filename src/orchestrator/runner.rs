@@ -159,7 +159,8 @@ impl Runner {
         if let Some(
             Command::MoveTo { base_from_tcp, .. }
             | Command::Grasp { base_from_tcp, .. }
-            | Command::Regrasp { base_from_tcp, .. },
+            | Command::Regrasp { base_from_tcp, .. }
+            | Command::Probe { base_from_tcp, .. },
         ) = command
         {
             recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
