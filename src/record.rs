@@ -113,7 +113,8 @@ impl std::fmt::Display for WhyTouchOnly {
         match self {
             WhyTouchOnly::Forced => write!(f, "the task is touch only"),
             WhyTouchOnly::NoCableDetected => write!(f, "no cable detected"),
-            WhyTouchOnly::DetectorUnusable { error } => write!(f, "detector unusable: {error}"),
+            // The device's error names the device: `detector: …`.
+            WhyTouchOnly::DetectorUnusable { error } => f.write_str(error),
         }
     }
 }

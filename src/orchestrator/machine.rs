@@ -3,7 +3,7 @@
 //! ```text
 //! idle ─Start─▶ ┌ grasping ─────────────────────────────────────────────┐
 //!               │ prepare ─▶ detect ─▶ approach ─▶ trial_grasp ─▶ evaluate │──▶ done
-//!               │    └─touch only─────────▲           search ◀──▶ ┤        │
+//!               │    └─── touch only ───▶▲              └─▶ search ◀─▶┘  │
 //!               │                                   regrasp ◀─┘  ▲  │    │──▶ failed
 //!               │                                      └─▶ verify ┘──┘    │
 //!               └───── DeviceFault, Abort ──────────────────────────▶ fault
@@ -191,26 +191,14 @@ impl GraspTask {
     /// left), or failed.
     #[state(superstate = "grasping", entry_action = "enter_trial_grasp")]
     fn trial_grasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
-        match event {
-            Event::Grasped {
-                base_from_tcp,
-                grip,
-            } => self.on_grasped(context, base_from_tcp, grip, State::evaluate()),
-            _ => Super,
-        }
+        self.on_grasped(context, event, State::evaluate())
     }
 
     /// Grasped (holding) → evaluate; Grasped (empty) → search again (poses
     /// left), or failed.
     #[state(superstate = "grasping", entry_action = "enter_search")]
     fn search(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
-        match event {
-            Event::Grasped {
-                base_from_tcp,
-                grip,
-            } => self.on_grasped(context, base_from_tcp, grip, State::evaluate()),
-            _ => Super,
-        }
+        self.on_grasped(context, event, State::evaluate())
     }
 
     /// Tactile → done (within tolerance), regrasp, search (nothing felt,
@@ -226,13 +214,7 @@ impl GraspTask {
     /// Grasped (holding) → verify; Grasped (empty) → failed.
     #[state(superstate = "grasping", entry_action = "enter_regrasp")]
     fn regrasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
-        match event {
-            Event::Grasped {
-                base_from_tcp,
-                grip,
-            } => self.on_grasped(context, base_from_tcp, grip, State::verify()),
-            _ => Super,
-        }
+        self.on_grasped(context, event, State::verify())
     }
 
     /// Tactile → done (within tolerance), regrasp, or failed.
@@ -423,13 +405,16 @@ impl GraspTask {
         true
     }
 
-    fn on_grasped(
-        &mut self,
-        context: &mut Context,
-        base_from_tcp: &Isometry3<f64>,
-        grip: &GripOutcome,
-        next: State,
-    ) -> Outcome<State> {
+    /// Grasped (holding) → `next`; Grasped (empty) → the search's next
+    /// pose, or failed; any other event → the superstate.
+    fn on_grasped(&mut self, context: &mut Context, event: &Event, next: State) -> Outcome<State> {
+        let Event::Grasped {
+            base_from_tcp,
+            grip,
+        } = event
+        else {
+            return Super;
+        };
         match grip {
             GripOutcome::Holding { .. } => {
                 self.base_from_tcp_grasped = *base_from_tcp;
