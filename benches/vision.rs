@@ -3,6 +3,11 @@
 //! photographs lie beside the project, on one of them (network-free: the
 //! classical mask, and the instance stages on its true mask).
 
+// The tests' scenes with known answers; the benchmark draws one of them.
+#[path = "../tests/common/scenes.rs"]
+#[allow(dead_code)]
+mod scenes;
+
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -10,10 +15,10 @@ use cablecell::perception::vision::mask;
 use cablecell::perception::vision::skeleton;
 use cablecell::perception::vision::spline::{BSpline, control_points_for_length};
 use cablecell::perception::vision::{GroundTruth, InstanceMethod, Pipeline, VisionConfig};
-use cablecell::sim::render::fixtures::demo_scene;
 use criterion::{Criterion, criterion_group, criterion_main};
 use opencv::imgcodecs;
 use opencv::prelude::*;
+use scenes::demo_scene;
 
 fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) {
     let config = VisionConfig::default();

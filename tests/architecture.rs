@@ -266,3 +266,32 @@ fn the_parser_sees_grouped_and_nested_imports() {
         ]
     );
 }
+
+/// Most a file may hold before its test module: more says that it mixes
+/// concerns, unless its first comment says why it is long ("long because").
+const MAX_LINES_BEFORE_TESTS: usize = 700;
+
+#[test]
+fn no_file_is_long_unless_it_says_why() {
+    let src = common::root().join("src");
+    let mut long = Vec::new();
+    for file in sources(&src) {
+        let text = std::fs::read_to_string(&file).expect("a readable source file");
+        let lines = text
+            .lines()
+            .position(|line| line.trim() == "#[cfg(test)]")
+            .unwrap_or_else(|| text.lines().count());
+        let first_comment: String = text
+            .lines()
+            .take_while(|line| line.starts_with("//"))
+            .collect();
+        if lines > MAX_LINES_BEFORE_TESTS && !first_comment.contains("long because") {
+            long.push(format!("{}: {lines} lines", file.display()));
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "files over {MAX_LINES_BEFORE_TESTS} lines before their tests:\n{}",
+        long.join("\n")
+    );
+}

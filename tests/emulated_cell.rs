@@ -279,8 +279,7 @@ fn a_wild_regrasp_correction_is_refused_by_the_workspace_box() {
 #[test]
 fn cablecell_run_on_the_emulated_cell_succeeds_and_a_device_fault_exits_with_3() {
     let run = |cell: &Path| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
-            .current_dir(common::root())
+        common::command()
             .args(["run", "tasks/regrasp.toml", "--seed", "3", "--cell"])
             .arg(cell)
             .output()

@@ -1,19 +1,16 @@
 //! `cablecell graph TASK`: the machine as Graphviz DOT.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use cablecell::orchestrator::graph::superstates;
 use cablecell::orchestrator::{State, Superstate};
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn graph(task: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    common::command()
         .args(["graph", task.to_str().unwrap()])
-        .current_dir(root())
         .output()
         .expect("cablecell runs")
 }
@@ -26,7 +23,7 @@ fn edge(from: State, label: &str, to: State) -> String {
 
 #[test]
 fn the_graph_holds_states_superstate_and_transitions() {
-    let output = graph(&root().join("tasks/regrasp.toml"));
+    let output = graph(&common::root().join("tasks/regrasp.toml"));
     assert!(output.status.success());
     let dot = String::from_utf8(output.stdout).unwrap();
     assert!(dot.starts_with("digraph \"regrasp\" {"), "{dot}");
@@ -85,7 +82,7 @@ fn the_graph_holds_states_superstate_and_transitions() {
 #[test]
 fn states_the_task_skips_are_drawn_as_skipped() {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(root().join("tasks/regrasp.toml")).unwrap();
+    let text = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
     let no_regrasp = text.replace("max_regrasps = 2", "max_regrasps = 0");
     assert_ne!(text, no_regrasp);
     let path = dir.path().join("no-regrasp.toml");
@@ -112,7 +109,7 @@ fn states_the_task_skips_are_drawn_as_skipped() {
 #[test]
 fn a_touch_only_task_skips_the_detector_and_one_without_a_prior_the_search() {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(root().join("tasks/regrasp.toml")).unwrap();
+    let text = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
     let touch_only = dir.path().join("touch-only.toml");
     std::fs::write(
         &touch_only,
@@ -138,6 +135,6 @@ fn a_touch_only_task_skips_the_detector_and_one_without_a_prior_the_search() {
 
 #[test]
 fn a_bad_task_file_is_bad_input() {
-    let output = graph(&root().join("tasks/missing.toml"));
+    let output = graph(&common::root().join("tasks/missing.toml"));
     assert_eq!(output.status.code(), Some(2));
 }

@@ -36,7 +36,7 @@ fn without_the_feature_a_panda_cell_says_how_to_build() {
 #[cfg(not(feature = "panda"))]
 #[test]
 fn without_the_feature_the_bring_up_command_says_how_to_build() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    let out = common::command()
         .args(["device", "arm", "--address", "172.16.0.2", "state"])
         .output()
         .expect("cablecell runs");
@@ -48,7 +48,6 @@ fn without_the_feature_the_bring_up_command_says_how_to_build() {
 #[cfg(feature = "panda")]
 mod emulated {
     use std::net::{IpAddr, Ipv4Addr};
-    use std::process::Command;
     use std::sync::{Mutex, MutexGuard};
 
     use approx::assert_relative_eq;
@@ -289,7 +288,7 @@ mod emulated {
     /// `cablecell device arm --address 127.0.0.LAST ARGS...`: its exit
     /// status, standard output and standard error.
     fn device_arm(last: u8, args: &[&str]) -> (Option<i32>, String, String) {
-        let out = Command::new(env!("CARGO_BIN_EXE_cablecell"))
+        let out = common::command()
             .args(["device", "arm", "--address", &format!("127.0.0.{last}")])
             .args(args)
             .output()

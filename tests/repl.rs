@@ -1,14 +1,13 @@
 //! `cablecell repl` driven through a pseudo-terminal, as an operator
 //! would: stepping the whole regrasp task, breakpoints with conditions,
-//! refused commands, Ctrl-C during `continue`, and leaving.
+//! refused commands, Ctrl-C during `continue`, a break in a search by
+//! touch, and leaving.
 
 use std::path::Path;
-use std::process::Command;
 
 mod common;
 
 use cablecell::orchestrator::State;
-use common::root;
 use rexpect::session::{PtySession, spawn_command};
 
 /// The REPL on the regrasp task, seed 3, on the simulated cell with an
@@ -22,12 +21,11 @@ fn repl(home: &Path, pace: &str, extra: &[&str]) -> PtySession {
 /// The same on the task file `task` (named `regrasp` too).
 fn repl_on(home: &Path, task: &str, pace: &str, extra: &[&str]) -> PtySession {
     let cell = common::sim_cell_with_oracle_file(home);
-    let mut command = Command::new(env!("CARGO_BIN_EXE_cablecell"));
+    let mut command = common::command();
     command
         .args(["repl", task, "--seed", "3", "--pace", pace])
         .args(["--cell", cell.to_str().expect("utf-8")])
         .args(extra)
-        .current_dir(root())
         .env("HOME", home)
         .env("TERM", "xterm")
         .env_remove("RUST_LOG");
@@ -280,7 +278,7 @@ fn abort_makes_the_cell_safe_and_refuses_what_cannot_be_done() {
 fn break_in_a_search_by_touch_and_step_through_it() {
     let home = tempfile::tempdir().unwrap();
     // Touch only, the prior 53 mm above the cable: the ninth pose finds it.
-    let shipped = std::fs::read_to_string(root().join("tasks/regrasp.toml")).unwrap();
+    let shipped = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
     let far = shipped
         .replace("# touch_only = true", "touch_only = true")
         .replace(

@@ -1,8 +1,6 @@
 //! The regrasp task end to end on the simulated cell, through the library
 //! and through the `cablecell run` command.
 
-use std::process::{Command, Output};
-
 mod common;
 
 use common::root;
@@ -35,14 +33,6 @@ fn run(task: &TaskFile, cell: &CellFile, seed: u64) -> RunRecord {
         runner.state()
     );
     runner.into_record()
-}
-
-fn cablecell(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cablecell runs")
 }
 
 #[test]
@@ -171,7 +161,7 @@ fn no_regrasp_allowed_fails_the_task_when_the_trial_is_off() {
 
 #[test]
 fn run_prints_transitions_poses_and_exits_zero() {
-    let out = cablecell(&["run", "tasks/regrasp.toml", "--seed", "3"]);
+    let out = common::cablecell(&["run", "tasks/regrasp.toml", "--seed", "3"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{text}");
     assert!(
@@ -187,7 +177,7 @@ fn run_prints_transitions_poses_and_exits_zero() {
 
 #[test]
 fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
-    let out = cablecell(&["run", "tasks/regrasp.toml", "--seed", "3", "--json"]);
+    let out = common::cablecell(&["run", "tasks/regrasp.toml", "--seed", "3", "--json"]);
     assert_eq!(out.status.code(), Some(0));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     assert_eq!(report["seed"], 3);

@@ -5,7 +5,6 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
 use cablecell::cell::CellDevices;
@@ -136,8 +135,7 @@ fn a_port_that_is_not_there_is_named_and_nothing_runs() {
         Err(other) => panic!("{other:?}"),
         Ok(_) => panic!("a cell on a missing port"),
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_cablecell"))
-        .current_dir(common::root())
+    let out = common::command()
         .args(["run", "tasks/regrasp.toml", "--cell"])
         .arg(&path)
         .output()
@@ -161,7 +159,7 @@ fn check_error(from: &str, to: &str) -> String {
     let line = text.lines().position(|l| l.contains(last)).expect("line") + 1;
     let dir = tempfile::tempdir().expect("scratch");
     let path = write(dir.path(), &text);
-    let out = Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    let out = common::command()
         .args(["check"])
         .arg(&path)
         .output()

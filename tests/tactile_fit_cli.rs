@@ -1,10 +1,12 @@
 //! `cablecell tactile-fit` on maps given on standard input or in a file.
 
+mod common;
+
 use std::io::Write;
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 
 fn tactile_fit(args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    let mut child = common::command()
         .arg("tactile-fit")
         .args(args)
         .stdin(Stdio::piped())

@@ -9,7 +9,7 @@ use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell;
 use cablecell::hw::DeviceError;
 use cablecell::hw::camera::config::{CameraBackend, CameraSource};
-use cablecell::hw::camera::{Camera, OpencvCamera};
+use cablecell::hw::camera::{Camera, ImageError, OpencvCamera};
 use cablecell::perception::vision::calibration::CameraModel;
 use common::{cablecell, json_of, root};
 use nalgebra::Vector3;
@@ -229,6 +229,33 @@ fn a_folder_camera_plays_its_images_in_order_then_says_it_is_done() {
     let mut missing =
         OpencvCamera::new(CameraSource::Folder(dir.path().join("nowhere")), intrinsics);
     assert_unusable(&mut missing, "nowhere");
+}
+
+#[test]
+fn a_folder_cameras_unreadable_image_reaches_the_cell_with_its_cause() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut jpeg = opencv::core::Vector::<u8>::new();
+    imgcodecs::imencode(
+        ".jpg",
+        &gray_image(64, 48),
+        &mut jpeg,
+        &opencv::core::Vector::new(),
+    )
+    .expect("imencode");
+    let jpeg = jpeg.to_vec();
+    std::fs::write(dir.path().join("a.jpg"), &jpeg[..jpeg.len() / 2]).expect("write");
+    let intrinsics = CameraModel::centred(64, 48, 1.0);
+    let mut camera = OpencvCamera::new(CameraSource::Folder(dir.path().to_path_buf()), intrinsics);
+    match camera.capture() {
+        Err(DeviceError::Image { source, .. }) => {
+            assert!(
+                matches!(*source.0, ImageError::TruncatedJpeg { .. }),
+                "{source}"
+            );
+            assert_eq!(source.0.path(), dir.path().join("a.jpg"));
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]

@@ -8,8 +8,9 @@ mod common;
 
 use common::{cablecell, json_of, text};
 
-use cablecell::sim::render::fixtures::{draw_scene, matte_cable, segment_px};
+use cablecell::perception::vision::curves::segment_px;
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
+use common::scenes::{draw_scene, matte_cable};
 use opencv::core::Vector;
 use opencv::imgcodecs;
 use opencv::prelude::*;
@@ -250,7 +251,7 @@ fn detect_finds_the_network_from_any_working_directory() {
         vec![cable([60.0, 120.0], [580.0, 380.0])],
         false,
     );
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cablecell"))
+    let out = common::command()
         .args(["detect", "elsewhere.jpg", "--mask", "network", "--json"])
         .args(["--straight-edge-radius-px", "0"])
         .current_dir(dir.path())

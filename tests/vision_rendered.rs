@@ -1,7 +1,7 @@
 //! The vision pipeline on rendered scenes whose answer is known exactly:
 //! one cable, several, a crossing, loops, plain and cluttered backgrounds.
 
-use std::path::PathBuf;
+mod common;
 
 use cablecell::perception::vision::network::{LazyNetwork, runtime_library};
 use cablecell::perception::vision::{
@@ -15,7 +15,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 fn network() -> LazyNetwork {
-    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models/cable_segmentation.onnx");
+    let model = common::root().join("models/cable_segmentation.onnx");
     LazyNetwork::new(model, runtime_library(None))
 }
 

@@ -43,9 +43,9 @@ impl CableDetector for VisionDetector {
         let output = self
             .pipeline
             .detect(&image, Some(&mut self.network))
-            .map_err(|error| DeviceError::Unusable {
+            .map_err(|error| DeviceError::Vision {
                 device: DeviceKind::Detector,
-                reason: error.to_string(),
+                source: error.into(),
             })?;
         tracing::debug!(
             mask = ?output.mask_used,
@@ -69,5 +69,79 @@ impl CableDetector for VisionDetector {
             cables: found.into_iter().map(|(_, detection)| detection).collect(),
             image: Some(CameraImage(Arc::new(image))),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::error::Error;
+    use std::path::PathBuf;
+
+    use nalgebra::{Isometry3, Point3, Vector3};
+    use opencv::core::{CV_8UC3, Mat, Scalar};
+
+    use super::*;
+    use crate::perception::vision::calibration::CameraModel;
+    use crate::perception::vision::grasp_frame::PlaneInBase;
+    use crate::perception::vision::network::{NetworkError, runtime_library};
+    use crate::perception::vision::{MaskMethod, VisionConfig, VisionError};
+
+    /// A camera that sees a plain gray table.
+    struct GrayCamera;
+
+    impl Camera for GrayCamera {
+        fn capture(&mut self) -> Result<Mat, DeviceError> {
+            Ok(Mat::new_rows_cols_with_default(48, 64, CV_8UC3, Scalar::all(128.0)).unwrap())
+        }
+    }
+
+    #[test]
+    fn a_vision_failure_reaches_the_device_layer_with_its_cause() {
+        let missing = PathBuf::from("/nonexistent/cable_segmentation.onnx");
+        let pipeline = Pipeline::new(VisionConfig {
+            mask: MaskMethod::Network,
+            ..VisionConfig::default()
+        });
+        let network = LazyNetwork::new(missing.clone(), runtime_library(None));
+        let to_base = ImageToBase {
+            intrinsics: CameraModel::centred(64, 48, 1.0),
+            base_from_camera: Isometry3::identity(),
+            cable_plane: PlaneInBase {
+                point_mm: Point3::new(0.0, 0.0, 500.0),
+                normal: Vector3::z_axis(),
+            },
+            approach_from: Vector3::y_axis(),
+        };
+        let mut detector = VisionDetector::new(pipeline, network, Some(to_base));
+        let error = detector.detect(&mut GrayCamera).unwrap_err();
+        // The message is the vision error's, after the device's name.
+        assert!(
+            error
+                .to_string()
+                .starts_with("detector: segmentation network failed: segmentation model"),
+            "{error}"
+        );
+        assert_eq!(error.device(), DeviceKind::Detector);
+        assert_eq!(error, error.clone());
+        let DeviceError::Vision { source, .. } = &error else {
+            panic!("{error:?}");
+        };
+        match &**source {
+            VisionError::Network {
+                source: NetworkError::ModelMissing { path, source },
+            } => {
+                assert_eq!(path, &missing);
+                assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+            }
+            other => panic!("{other:?}"),
+        }
+        // The I/O error is in the chain of sources, for a reporter to walk.
+        let mut cause: Option<&dyn Error> = error.source();
+        let mut io_found = false;
+        while let Some(c) = cause {
+            io_found |= c.downcast_ref::<std::io::Error>().is_some();
+            cause = c.source();
+        }
+        assert!(io_found, "{error:?}");
     }
 }

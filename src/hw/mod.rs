@@ -9,7 +9,12 @@ pub mod emulator;
 pub mod gripper;
 pub mod tactile;
 
+use std::sync::Arc;
+
 use serde::Serialize;
+
+use crate::perception::vision::VisionError;
+use camera::ImageError;
 
 /// Which device of the cell, as named in errors and records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -80,6 +85,25 @@ pub enum DeviceError {
     /// uncalibrated camera. Fix the cell file or the installation.
     #[error("{device}: {reason}")]
     Unusable { device: DeviceKind, reason: String },
+    /// The vision pipeline failed on the camera's image; `source` says
+    /// how (the segmentation network's model file or ONNX Runtime library,
+    /// its inference, an OpenCV failure, an image the pipeline cannot
+    /// take), and its variant's documentation how to fix it.
+    #[error("{device}: {source}")]
+    Vision {
+        device: DeviceKind,
+        #[source]
+        source: SharedError<VisionError>,
+    },
+    /// The camera's next image could not be read (a folder camera's file
+    /// missing, unreadable, truncated or not an image); `source` names the
+    /// file and says which.
+    #[error("{device}: {source}")]
+    Image {
+        device: DeviceKind,
+        #[source]
+        source: SharedError<ImageError>,
+    },
     /// A pose outside the cell's workspace box was asked for, and refused
     /// before the device moved: check the task's poses, the detection or
     /// the tactile correction that produced it, or widen the box in the
@@ -130,8 +154,64 @@ impl DeviceError {
             | DeviceError::Disconnected { device, .. }
             | DeviceError::Garbled { device, .. }
             | DeviceError::Unusable { device, .. }
+            | DeviceError::Vision { device, .. }
+            | DeviceError::Image { device, .. }
             | DeviceError::OutsideWorkspace { device, .. }
             | DeviceError::TooFast { device, .. } => *device,
         }
+    }
+}
+
+/// An error shared, behind an [`Arc`], by the copies of the
+/// [`DeviceError`] that carries it: device errors are cloned into the
+/// machine's events and the run record, and the errors of the layers
+/// below (OpenCV's, ONNX Runtime's, I/O) cannot be cloned. It displays as
+/// the error, and its source is the error's. Two are equal when they are
+/// the same error or say the same, as the message-only errors it replaces
+/// compared.
+#[derive(Debug)]
+pub struct SharedError<E>(pub Arc<E>);
+
+impl<E> SharedError<E> {
+    pub fn new(error: E) -> Self {
+        SharedError(Arc::new(error))
+    }
+}
+
+impl<E> From<E> for SharedError<E> {
+    fn from(error: E) -> Self {
+        SharedError::new(error)
+    }
+}
+
+impl<E> Clone for SharedError<E> {
+    fn clone(&self) -> Self {
+        SharedError(Arc::clone(&self.0))
+    }
+}
+
+impl<E> std::ops::Deref for SharedError<E> {
+    type Target = E;
+
+    fn deref(&self) -> &E {
+        &self.0
+    }
+}
+
+impl<E: std::fmt::Display> PartialEq for SharedError<E> {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0) || self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl<E: std::fmt::Display> std::fmt::Display for SharedError<E> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<E: std::error::Error> std::error::Error for SharedError<E> {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
     }
 }

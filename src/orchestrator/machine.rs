@@ -162,12 +162,7 @@ impl GraspTask {
                 }
                 (None, None) => fail(context, Failure::NothingDetected),
             },
-            Event::DeviceFault(
-                error @ DeviceError::Unusable {
-                    device: DeviceKind::Detector | DeviceKind::Camera,
-                    ..
-                },
-            ) => match context.plan.prior {
+            Event::DeviceFault(error) if vision_unusable(error) => match context.plan.prior {
                 Some(prior) => {
                     let error = error.to_string();
                     self.start_search(context, prior, WhyTouchOnly::DetectorUnusable { error })
@@ -327,6 +322,20 @@ impl GraspTask {
             open_mm: context.plan.open_mm,
         });
     }
+}
+
+/// Whether `error` says that the camera cannot place the cable, and
+/// nothing worse: the detector or camera cannot work as set up, the
+/// pipeline failed on the image, or the image could not be read.
+fn vision_unusable(error: &DeviceError) -> bool {
+    matches!(
+        error,
+        DeviceError::Unusable {
+            device: DeviceKind::Detector | DeviceKind::Camera,
+            ..
+        } | DeviceError::Vision { .. }
+            | DeviceError::Image { .. }
+    )
 }
 
 /// The TCP's pose that puts the cable of grasp frame `base_from_cable` at

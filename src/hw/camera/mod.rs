@@ -6,7 +6,7 @@ mod image_file;
 mod opencv_camera;
 mod sim;
 
-pub use image_file::read_image;
+pub use image_file::{ImageError, read_image};
 pub use opencv_camera::OpencvCamera;
 pub use sim::SimCamera;
 

@@ -107,7 +107,10 @@ impl OpencvCamera {
                     return Err(self.unusable(format!("all {count} images have been read")));
                 };
                 *next += 1;
-                read_image(&path).map_err(|e| self.unusable(e))
+                read_image(&path).map_err(|source| DeviceError::Image {
+                    device: DeviceKind::Camera,
+                    source: source.into(),
+                })
             }
         }
     }

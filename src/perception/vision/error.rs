@@ -8,10 +8,27 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum VisionError {
-    /// An image file could not be read or decoded. Check that the path
-    /// exists and holds a PNG or JPEG that OpenCV can decode.
-    #[error("cannot read image {path}: {reason}")]
-    ReadImage { path: PathBuf, reason: String },
+    /// A ground-truth file (a mask or the centre lines' `STEM.txt`) could
+    /// not be read (`source`: the I/O error). Check that the data set
+    /// folder holds it and that it can be read.
+    #[error("cannot read {path}: {source}")]
+    ReadTruth {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A ground-truth mask is not an image OpenCV can decode (`source`:
+    /// OpenCV's error, when it gave one). Check that it is a whole PNG.
+    #[error(
+        "cannot read image {path}: not a decodable image{}",
+        source.as_ref().map(|e| format!(" ({e})")).unwrap_or_default()
+    )]
+    DecodeTruth {
+        path: PathBuf,
+        #[source]
+        source: Option<opencv::Error>,
+    },
 
     /// The image has no pixels (a failed capture, an empty file). Give the
     /// pipeline a non-empty image.
@@ -47,10 +64,14 @@ pub enum VisionError {
     )]
     NoNetwork,
 
-    /// The segmentation network failed; `reason` says how (model file,
-    /// runtime, tensor shape).
-    #[error("segmentation network failed: {reason}")]
-    Network { reason: String },
+    /// The segmentation network could not be loaded or run; `source` says
+    /// how (model file, ONNX Runtime library, inference, tensor shape) and
+    /// its variant's documentation how to fix it.
+    #[error("segmentation network failed: {source}")]
+    Network {
+        #[source]
+        source: super::network::NetworkError,
+    },
 
     /// The network returned a mask the pipeline cannot use: it must have
     /// one channel (8-bit 0/255 or 0/1, or 32-bit float probabilities).

@@ -54,33 +54,149 @@ pub fn input_scale_is_valid(scale: f64) -> bool {
 /// The model's input and output names.
 const INPUT: &str = "bgr";
 
-/// Errors of the segmentation network.
+/// Errors of the segmentation network. Each keeps what caused it (the
+/// I/O, ONNX Runtime or OpenCV error) as its source, and says it in its
+/// message too.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NetworkError {
-    /// The model file is missing or unreadable. Fix: pass the path of
-    /// `models/cable_segmentation.onnx` (or retrain it with
-    /// `models/train_segmentation.py`).
-    #[error("segmentation model {path} is missing or unreadable: {reason}")]
-    ModelMissing { path: PathBuf, reason: String },
-    /// The ONNX Runtime library could not be loaded, or a different one is
-    /// already loaded in this process. Fix: run `scripts/setup`, which puts
-    /// it in `.setup/onnxruntime/`, or point `ORT_DYLIB_PATH` at a
+    /// The model file is missing or unreadable (`source`: the I/O error).
+    /// Fix: pass the path of `models/cable_segmentation.onnx` (or retrain
+    /// it with `models/train_segmentation.py`).
+    #[error("segmentation model {path} is missing or unreadable: {source}")]
+    ModelMissing {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The ONNX Runtime library file is missing or cannot be opened
+    /// (`source`: the I/O error). Fix: run `scripts/setup`, which puts it
+    /// in `.setup/onnxruntime/`, or point `ORT_DYLIB_PATH` at a
     /// `libonnxruntime.so` of version 1.31 or later.
     #[error(
-        "ONNX Runtime library {library} could not be used: {reason} \
+        "ONNX Runtime library {library} could not be used: cannot open the library file: {source} \
          (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
     )]
-    Runtime { library: PathBuf, reason: String },
-    /// The model could not be prepared or run (a corrupt or incompatible
-    /// model, or ONNX Runtime failed).
-    #[error("segmentation network inference failed: {reason}")]
-    Inference { reason: String },
+    RuntimeMissing {
+        library: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The path given for the ONNX Runtime library is a folder or another
+    /// file that is not a regular file. Fix: as for
+    /// [`Self::RuntimeMissing`].
+    #[error(
+        "ONNX Runtime library {library} could not be used: not a file \
+         (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
+    )]
+    RuntimeNotAFile { library: PathBuf },
+    /// Another ONNX Runtime library, `loaded`, is already loaded in this
+    /// process, and only one can be. Fix: name the same library
+    /// everywhere in one process (`--onnxruntime`, `ORT_DYLIB_PATH`).
+    #[error(
+        "ONNX Runtime library {library} could not be used: ONNX Runtime is already loaded in this \
+         process from {loaded}, and only one library can be loaded per process \
+         (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
+    )]
+    RuntimeConflict { library: PathBuf, loaded: PathBuf },
+    /// ONNX Runtime could not be loaded from the library (`source`: `ort`'s
+    /// error): a file that is no shared library, or one of too old a
+    /// version. Fix: as for [`Self::RuntimeMissing`].
+    #[error(
+        "ONNX Runtime library {library} could not be used: {source} \
+         (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
+    )]
+    RuntimeLoad {
+        library: PathBuf,
+        #[source]
+        source: ort::LoadDynamicError,
+    },
+    /// ONNX Runtime, once loaded, could not set up its environment
+    /// (`source`: its error). Fix: as for [`Self::RuntimeMissing`].
+    #[error(
+        "ONNX Runtime library {library} could not be used: {source} \
+         (run scripts/setup, or set ORT_DYLIB_PATH to libonnxruntime.so ≥ 1.31)"
+    )]
+    Runtime {
+        library: PathBuf,
+        #[source]
+        source: ort::Error,
+    },
+    /// ONNX Runtime could not make a session of the model (`source`: its
+    /// error): the file is corrupt or no ONNX model, or one this runtime
+    /// cannot run. Fix: use the shipped `models/cable_segmentation.onnx`
+    /// or export the model again.
+    #[error("segmentation network inference failed: model {path}: {source}")]
+    ModelInvalid {
+        path: PathBuf,
+        #[source]
+        source: ort::Error,
+    },
+    /// The model does not have the one input and one output the pipeline
+    /// feeds and reads. Fix: use a model made by
+    /// `models/train_segmentation.py`.
+    #[error(
+        "segmentation network inference failed: model {path} has {inputs} inputs and {outputs} \
+         outputs, expected one of each"
+    )]
+    ModelShape {
+        path: PathBuf,
+        inputs: usize,
+        outputs: usize,
+    },
+    /// ONNX Runtime failed to run the model on an image (`source`: its
+    /// error), e.g. out of memory, or a model whose input is not the
+    /// image's layout. Fix: check the model and the memory free.
+    #[error("segmentation network inference failed: {source}")]
+    Inference {
+        #[source]
+        source: ort::Error,
+    },
+    /// The image could not be laid out as the network's input tensor
+    /// (`source`: ndarray's error): a bug, since the tensor is made from
+    /// the resized image. Report it with the image's size.
+    #[error("segmentation network inference failed: input tensor: {source}")]
+    InputTensor {
+        #[source]
+        source: ndarray::ShapeError,
+    },
+    /// The model's output is not one probability per pixel of its input.
+    /// Fix: use a model made by `models/train_segmentation.py`.
+    #[error(
+        "segmentation network inference failed: output of shape {shape:?}, expected [1, 1, {height}, {width}]"
+    )]
+    OutputShape {
+        shape: Vec<i64>,
+        width: i32,
+        height: i32,
+    },
     /// The input image is not what the network takes: it must be a
-    /// non-empty 8-bit, 3-channel BGR image (or an OpenCV operation on it
-    /// failed).
-    #[error("segmentation network input image: {reason}")]
-    Image { reason: String },
+    /// non-empty 8-bit, 3-channel BGR image. Fix: convert it first (the
+    /// pipeline does).
+    #[error(
+        "segmentation network input image: expected a non-empty 8-bit 3-channel BGR image, \
+         got {cols}x{rows} of type {typ}"
+    )]
+    Image { cols: i32, rows: i32, typ: String },
+    /// The network's input scale is outside (0, [`MAX_INPUT_SCALE`]]. Fix:
+    /// set `input_scale` (`--net-scale`) within it.
+    #[error(
+        "segmentation network input image: input scale {scale} is outside (0, {MAX_INPUT_SCALE}]"
+    )]
+    InputScale { scale: f64 },
+    /// An OpenCV operation on the image or the network's output failed at
+    /// `stage` (`source`: OpenCV's error): a bug or an out-of-memory image.
+    #[error("segmentation network input image: {stage}: {source}")]
+    OpenCv {
+        stage: &'static str,
+        #[source]
+        source: opencv::Error,
+    },
+}
+
+/// Wraps an OpenCV error with the stage it happened in, for `map_err`.
+fn cv(stage: &'static str) -> impl FnOnce(opencv::Error) -> NetworkError {
+    move |source| NetworkError::OpenCv { stage, source }
 }
 
 /// The ONNX Runtime environment of this process and the library it came
@@ -90,15 +206,17 @@ static RUNTIME: Mutex<Option<(PathBuf, Environment)>> = Mutex::new(None);
 
 /// The process's ONNX Runtime environment, loading `library` the first time.
 fn environment(library: &Path) -> Result<Environment, NetworkError> {
-    let runtime_error = |reason: String| NetworkError::Runtime {
-        library: library.to_path_buf(),
-        reason,
-    };
+    let library_path = || library.to_path_buf();
     let wanted = library
         .canonicalize()
-        .map_err(|e| runtime_error(format!("cannot open the library file: {e}")))?;
+        .map_err(|source| NetworkError::RuntimeMissing {
+            library: library_path(),
+            source,
+        })?;
     if !wanted.is_file() {
-        return Err(runtime_error("not a file".to_owned()));
+        return Err(NetworkError::RuntimeNotAFile {
+            library: library_path(),
+        });
     }
     // A panic elsewhere while holding the lock leaves the value consistent.
     let mut runtime = RUNTIME.lock().unwrap_or_else(|e| e.into_inner());
@@ -106,18 +224,23 @@ fn environment(library: &Path) -> Result<Environment, NetworkError> {
         if *loaded == wanted {
             return Ok(env.clone());
         }
-        return Err(runtime_error(format!(
-            "ONNX Runtime is already loaded in this process from {}, and only one \
-             library can be loaded per process",
-            loaded.display()
-        )));
+        return Err(NetworkError::RuntimeConflict {
+            library: library_path(),
+            loaded: loaded.clone(),
+        });
     }
     let env = ort::init_from(&wanted)
-        .map_err(|e| runtime_error(e.to_string()))?
+        .map_err(|source| NetworkError::RuntimeLoad {
+            library: library_path(),
+            source,
+        })?
         .with_name("cablecell")
         .with_telemetry(false)
         .build()
-        .map_err(|e| runtime_error(e.to_string()))?;
+        .map_err(|source| NetworkError::Runtime {
+            library: library_path(),
+            source,
+        })?;
     *runtime = Some((wanted, env.clone()));
     Ok(env)
 }
@@ -160,17 +283,18 @@ impl SegmentationNet {
     /// The library is loaded once per process: a second `load` naming
     /// another library gives [`NetworkError::Runtime`].
     pub fn load(model: &Path, runtime_library: &Path) -> Result<Self, NetworkError> {
-        let model_bytes = std::fs::read(model).map_err(|e| NetworkError::ModelMissing {
+        let model_bytes = std::fs::read(model).map_err(|source| NetworkError::ModelMissing {
             path: model.to_path_buf(),
-            reason: e.to_string(),
+            source,
         })?;
         let env = environment(runtime_library)?;
-        let inference = |e: ort::Error| NetworkError::Inference {
-            reason: format!("model {}: {e}", model.display()),
+        let invalid = |source: ort::Error| NetworkError::ModelInvalid {
+            path: model.to_path_buf(),
+            source,
         };
-        let recover = |e: ort::Error<ort::session::builder::SessionBuilder>| inference(e.into());
+        let recover = |e: ort::Error<ort::session::builder::SessionBuilder>| invalid(e.into());
         let session = Session::builder(&env)
-            .map_err(inference)?
+            .map_err(invalid)?
             .with_intra_threads(INTRA_THREADS)
             .map_err(recover)?
             .with_inter_threads(1)
@@ -178,15 +302,12 @@ impl SegmentationNet {
             .with_optimization_level(GraphOptimizationLevel::All)
             .map_err(recover)?
             .commit_from_memory(&model_bytes)
-            .map_err(inference)?;
+            .map_err(invalid)?;
         if session.inputs().len() != 1 || session.outputs().len() != 1 {
-            return Err(NetworkError::Inference {
-                reason: format!(
-                    "model {} has {} inputs and {} outputs, expected one of each",
-                    model.display(),
-                    session.inputs().len(),
-                    session.outputs().len()
-                ),
+            return Err(NetworkError::ModelShape {
+                path: model.to_path_buf(),
+                inputs: session.inputs().len(),
+                outputs: session.outputs().len(),
             });
         }
         tracing::debug!(model = %model.display(), "segmentation network loaded");
@@ -202,25 +323,16 @@ impl SegmentationNet {
     /// The cable probability of every pixel of a BGR image: CV_32F in
     /// [0, 1], the image's size.
     pub fn probability(&mut self, bgr: &Mat) -> Result<Mat, NetworkError> {
-        let image = |e: opencv::Error| NetworkError::Image {
-            reason: e.to_string(),
-        };
         if bgr.empty() || bgr.typ() != CV_8UC3 {
             return Err(NetworkError::Image {
-                reason: format!(
-                    "expected a non-empty 8-bit 3-channel BGR image, got {}x{} of type {}",
-                    bgr.cols(),
-                    bgr.rows(),
-                    core::type_to_string(bgr.typ()).unwrap_or_default()
-                ),
+                cols: bgr.cols(),
+                rows: bgr.rows(),
+                typ: core::type_to_string(bgr.typ()).unwrap_or_default(),
             });
         }
         if !input_scale_is_valid(self.input_scale) {
-            return Err(NetworkError::Image {
-                reason: format!(
-                    "input scale {} is outside (0, {MAX_INPUT_SCALE}]",
-                    self.input_scale
-                ),
+            return Err(NetworkError::InputScale {
+                scale: self.input_scale,
             });
         }
         let (w, h) = network_size(bgr.cols(), bgr.rows(), self.input_scale);
@@ -232,20 +344,17 @@ impl SegmentationNet {
             0.0,
             imgproc::INTER_AREA,
         )
-        .map_err(image)?;
-        let bytes = self.small.data_bytes().map_err(image)?;
+        .map_err(cv("resize to the network's input size"))?;
+        let bytes = self
+            .small
+            .data_bytes()
+            .map_err(cv("read the resized image"))?;
         self.input.clear();
         self.input.extend(bytes.iter().map(|&b| f32::from(b)));
         let (w_us, h_us) = (w as usize, h as usize);
-        let view =
-            ndarray::ArrayView4::from_shape((1, h_us, w_us, 3), &self.input[..]).map_err(|e| {
-                NetworkError::Inference {
-                    reason: format!("input tensor: {e}"),
-                }
-            })?;
-        let inference = |e: ort::Error| NetworkError::Inference {
-            reason: e.to_string(),
-        };
+        let view = ndarray::ArrayView4::from_shape((1, h_us, w_us, 3), &self.input[..])
+            .map_err(|source| NetworkError::InputTensor { source })?;
+        let inference = |source: ort::Error| NetworkError::Inference { source };
         let tensor = TensorRef::from_array_view(view).map_err(inference)?;
         let outputs = self
             .session
@@ -253,21 +362,24 @@ impl SegmentationNet {
             .map_err(inference)?;
         let (shape, data) = outputs[0].try_extract_tensor::<f32>().map_err(inference)?;
         if shape.iter().product::<i64>() != (w_us * h_us) as i64 || data.len() != w_us * h_us {
-            return Err(NetworkError::Inference {
-                reason: format!("output of shape {shape:?}, expected [1, 1, {h}, {w}]"),
+            return Err(NetworkError::OutputShape {
+                shape: shape.to_vec(),
+                width: w,
+                height: h,
             });
         }
-        let small_prob = Mat::new_rows_cols_with_data(h, w, data).map_err(image)?;
+        let small_prob =
+            Mat::new_rows_cols_with_data(h, w, data).map_err(cv("wrap the network's output"))?;
         let mut prob = Mat::default();
         imgproc::resize(
             &small_prob,
             &mut prob,
-            bgr.size().map_err(image)?,
+            bgr.size().map_err(cv("image size"))?,
             0.0,
             0.0,
             imgproc::INTER_LINEAR,
         )
-        .map_err(image)?;
+        .map_err(cv("resize the probabilities to the image's size"))?;
         Ok(prob)
     }
 
@@ -282,9 +394,7 @@ impl SegmentationNet {
             &mut mask,
             core::CMP_GT,
         )
-        .map_err(|e| NetworkError::Image {
-            reason: e.to_string(),
-        })?;
+        .map_err(cv("threshold the probabilities"))?;
         Ok(mask)
     }
 }
@@ -355,19 +465,16 @@ impl LazyNetwork {
 
 impl MaskNetwork for LazyNetwork {
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        let net =
-            match &mut self.loaded {
-                Some(net) => net,
-                None => {
-                    let mut net = SegmentationNet::load(&self.model, &self.runtime_library)
-                        .map_err(|e| VisionError::Network {
-                            reason: e.to_string(),
-                        })?;
-                    net.threshold = self.threshold;
-                    net.input_scale = self.input_scale;
-                    self.loaded.insert(net)
-                }
-            };
+        let net = match &mut self.loaded {
+            Some(net) => net,
+            None => {
+                let mut net = SegmentationNet::load(&self.model, &self.runtime_library)
+                    .map_err(|source| VisionError::Network { source })?;
+                net.threshold = self.threshold;
+                net.input_scale = self.input_scale;
+                self.loaded.insert(net)
+            }
+        };
         MaskNetwork::mask(net, bgr)
     }
 }
@@ -375,9 +482,7 @@ impl MaskNetwork for LazyNetwork {
 /// The pipeline's view of the network: its thresholded mask.
 impl MaskNetwork for SegmentationNet {
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        SegmentationNet::mask(self, bgr).map_err(|error| VisionError::Network {
-            reason: error.to_string(),
-        })
+        SegmentationNet::mask(self, bgr).map_err(|source| VisionError::Network { source })
     }
 }
 

@@ -419,7 +419,7 @@ pub(super) fn finish_paths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::render::fixtures::segment_px;
+    use crate::perception::vision::curves::segment_px;
     use opencv::core::{CV_8UC3, Point, Scalar};
 
     #[test]

@@ -4,7 +4,7 @@
 //! exact masks and centre lines as ground truth. It is the simulated
 //! camera's image of the simulated world (`render_world`), the vision
 //! network's training data (`write_dataset`, in the layout of the
-//! cables-dev data set) and the vision tests' fixtures.
+//! cables-dev data set) and the vision tests' scenes (`tests/common/scenes.rs`).
 //!
 //! Drawing happens in floating point: background, then the cables in
 //! order (a later cable over an earlier one, so crossings occlude; each
@@ -15,7 +15,6 @@
 
 mod background;
 mod dataset;
-pub mod fixtures;
 mod marker;
 mod random;
 mod tube;

@@ -1,40 +1,14 @@
 //! Scenes with known answers for the vision pipeline's tests and
-//! benchmarks: cables along given curves (arcs, segments) on a given
+//! benchmarks (`benches/vision.rs` includes this file): cables along given curves (arcs, segments) on a given
 //! background, drawn by the renderer in even light without blur.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::{Background, CableSpec, Light, RenderError, RenderedScene, SceneSpec, render};
-
-/// Points along a circular arc, every pixel or so: centre, radius, start
-/// and end angle (radians, image coordinates: y down).
-pub fn arc_px(centre: [f64; 2], radius_px: f64, from_rad: f64, to_rad: f64) -> Vec<[f64; 2]> {
-    let steps = ((to_rad - from_rad).abs() * radius_px).ceil().max(1.0) as usize;
-    (0..=steps)
-        .map(|i| {
-            let t = from_rad + (to_rad - from_rad) * i as f64 / steps as f64;
-            [
-                centre[0] + radius_px * t.cos(),
-                centre[1] + radius_px * t.sin(),
-            ]
-        })
-        .collect()
-}
-
-/// Points along a line segment, every pixel or so.
-pub fn segment_px(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
-    let steps = (to[0] - from[0]).hypot(to[1] - from[1]).ceil().max(1.0) as usize;
-    (0..=steps)
-        .map(|i| {
-            let t = i as f64 / steps as f64;
-            [
-                from[0] + t * (to[0] - from[0]),
-                from[1] + t * (to[1] - from[1]),
-            ]
-        })
-        .collect()
-}
+use cablecell::perception::vision::curves::{arc_px, segment_px};
+use cablecell::sim::render::{
+    Background, CableSpec, Light, RenderError, RenderedScene, SceneSpec, render,
+};
 
 /// The point halfway along a polyline's length.
 pub fn midpoint_px(points: &[[f64; 2]]) -> Option<[f64; 2]> {

@@ -1,0 +1,161 @@
+//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep [--rounds N]]`
+
+mod load;
+mod print;
+mod score;
+mod sweep;
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use cablecell::campaign::stats::{Rate, Summary};
+use cablecell::perception::vision::eval::{GroundTruth, ImageScore};
+use clap::Args;
+use opencv::core::Mat;
+use serde::Serialize;
+
+use super::Status;
+use super::vision_io::VisionArgs;
+use load::load_samples;
+use print::{print_evaluation, print_json};
+use score::{evaluate, labels_own_dice};
+use sweep::sweep;
+
+#[derive(Args, Debug, Clone)]
+pub struct EvalVisionArgs {
+    pub dir: PathBuf,
+    #[command(flatten)]
+    pub vision: VisionArgs,
+    /// Score only images whose name sorts at or after this, e.g. 00030.
+    #[arg(long)]
+    pub from: Option<String>,
+    /// Score only images whose name sorts at or before this, e.g. 00044.
+    #[arg(long)]
+    pub to: Option<String>,
+    /// Score the main settings (mask method, network input size, 8-bit or
+    /// float network, instance method, superpixel size) one after another
+    /// and print a table of run time against error; the other vision
+    /// options set what a row does not.
+    #[arg(long)]
+    pub sweep: bool,
+    /// With --sweep: time the settings in this many rounds, taking turns,
+    /// and give each one's median and 95th percentile over all rounds. A
+    /// machine's speed drifts over minutes; rounds spread the drift over
+    /// every setting instead of loading it onto a few.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
+    /// Write each image, as DIR/NAME.png, with the cables found drawn on
+    /// it as `detect --overlay` draws them, the labelled centre lines in
+    /// white, and in red the labelled cables not found and the found ones
+    /// not labelled.
+    #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
+    pub overlay: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Serialize)]
+struct Evaluation {
+    images: usize,
+    union_iou: Option<Summary>,
+    union_dice: Option<Summary>,
+    /// The union DICE with each image's found mask moved by its
+    /// [`ImageScore::mask_offset_px`].
+    union_dice_at_offset: Option<Summary>,
+    instance_dice: Option<Summary>,
+    count_right: Option<Rate>,
+    /// Labelled cables that a detection matches, over all images.
+    labels_found: Option<Rate>,
+    /// Detections that match a labelled cable, over all images.
+    found_labelled: Option<Rate>,
+    /// The labelled centre lines' length near a found one, over all images.
+    labelled_length_found: Option<LengthShare>,
+    /// The found centre lines' length near a labelled one, over all images.
+    found_length_labelled: Option<LengthShare>,
+    centerline_px: Option<Summary>,
+    grasp_error_px: Option<Summary>,
+    /// Per stage, and "total": median and 95th percentile among the rest.
+    stage_ms: BTreeMap<&'static str, Summary>,
+    /// Each image's end-to-end time, in order; the sweep adds its later
+    /// rounds' times here.
+    #[serde(skip)]
+    total_ms: Vec<f64>,
+    per_image: Vec<(String, ImageScore)>,
+    /// How many images each mask ran on: `auto` chooses per image.
+    mask_used: MaskUse,
+    /// What the pipeline said about an image (fallbacks taken, detections
+    /// dropped as edges or as cables too little in view), by image.
+    notes: Vec<(String, String)>,
+}
+
+/// Images by the mask that ran on them.
+#[derive(Serialize, Default)]
+struct MaskUse {
+    classical: usize,
+    network: usize,
+}
+
+/// The labels' own union DICE: their centre lines drawn `width_px` wide
+/// against their masks, a reference for the pipeline's union DICE.
+#[derive(Serialize)]
+struct LabelsOwnDice {
+    width_px: f64,
+    union_dice: Summary,
+}
+
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    evaluation: Evaluation,
+    labels_own_union_dice: Option<LabelsOwnDice>,
+}
+
+/// How much of one side's centre-line length lies within
+/// [`CENTRELINE_NEAR_PX`] of the other side's.
+#[derive(Serialize)]
+struct LengthShare {
+    share: f64,
+    length_px: f64,
+}
+
+/// An image with its ground truth, read once for all settings.
+struct Sample {
+    stem: String,
+    path: PathBuf,
+    image: Mat,
+    truth: GroundTruth,
+}
+
+pub fn eval_vision(args: &EvalVisionArgs) -> Status {
+    let samples = match load_samples(args) {
+        Ok(samples) => samples,
+        Err(messages) => {
+            for message in messages {
+                eprintln!("error: {message}");
+            }
+            return Status::BadInput;
+        }
+    };
+    if args.sweep {
+        return sweep(args, &samples);
+    }
+    let report = evaluate(&args.vision, &samples, args.overlay.as_deref()).and_then(|evaluation| {
+        Ok(Report {
+            evaluation,
+            labels_own_union_dice: labels_own_dice(&samples)?,
+        })
+    });
+    let report = match report {
+        Ok(report) => report,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return Status::TaskFailed;
+        }
+    };
+    if args.json {
+        print_json(&report)
+    } else {
+        print_evaluation(&args.dir, &report);
+        Status::Success
+    }
+}

@@ -1,0 +1,205 @@
+//! Scoring the pipeline against the labels: masks, instances, centre lines
+//! and grasp points, and the labels' own consistency.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use cablecell::campaign::stats::{Rate, Summary};
+use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
+use cablecell::perception::vision::{MaskMethod, MaskNetwork, VisionOutput};
+use opencv::core::{Mat, Point, Scalar};
+use opencv::imgproc;
+use opencv::prelude::*;
+
+use crate::cli::vision_io::{VisionArgs, create_dir, draw_line, draw_overlay, write_png};
+
+use super::{Evaluation, LabelsOwnDice, LengthShare, MaskUse, Sample};
+
+pub(super) fn labels_own_dice(samples: &[Sample]) -> Result<Option<LabelsOwnDice>, String> {
+    let truths: Vec<&GroundTruth> = samples.iter().map(|s| &s.truth).collect();
+    let consistency = label_consistency(&truths)
+        .map_err(|error| format!("drawing the labelled centre lines: {error}"))?;
+    Ok(consistency.and_then(|c| {
+        Summary::of(&c.union_dice).map(|union_dice| LabelsOwnDice {
+            width_px: c.width_px,
+            union_dice,
+        })
+    }))
+}
+
+/// Runs the pipeline configured by `vision` on every sample and scores it,
+/// drawing each result into `overlay` when given. The first image is run
+/// once untimed before the loop, so that loading the network and first-use
+/// allocations are not counted as its time.
+pub(super) fn evaluate(
+    vision: &VisionArgs,
+    samples: &[Sample],
+    overlay: Option<&Path>,
+) -> Result<Evaluation, String> {
+    if let Some(dir) = overlay {
+        create_dir(dir)?;
+    }
+    let mut pipeline = vision.pipeline(true);
+    let mut network = vision.network();
+    let mut per_image = Vec::new();
+    let mut notes = Vec::new();
+    let mut mask_used = MaskUse::default();
+    let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
+    for (k, sample) in samples.iter().enumerate() {
+        if k == 0 {
+            pipeline
+                .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
+                .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+        }
+        let output = pipeline
+            .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
+            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+        for (stage, ms) in &output.timings_ms {
+            stage_ms.entry(stage).or_default().push(*ms);
+        }
+        stage_ms
+            .entry("total")
+            .or_default()
+            .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
+        let image_score = score(&output, &sample.truth)
+            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+        if let Some(dir) = overlay {
+            let drawn = draw_comparison(&sample.image, &output, &sample.truth, &image_score)
+                .map_err(|e| format!("cannot draw the overlay of {}: {e}", sample.stem))?;
+            write_png(&dir.join(format!("{}.png", sample.stem)), &drawn)?;
+        }
+        per_image.push((sample.stem.clone(), image_score));
+        match output.mask_used {
+            MaskMethod::Network => mask_used.network += 1,
+            _ => mask_used.classical += 1,
+        }
+        notes.extend(
+            output
+                .notes
+                .into_iter()
+                .map(|note| (sample.stem.clone(), note)),
+        );
+    }
+    let of = |f: &dyn Fn(&ImageScore) -> Option<f64>| {
+        Summary::of(
+            &per_image
+                .iter()
+                .filter_map(|(_, s)| f(s))
+                .collect::<Vec<_>>(),
+        )
+    };
+    Ok(Evaluation {
+        images: per_image.len(),
+        union_iou: of(&|s| Some(s.union_iou)),
+        union_dice: of(&|s| Some(s.union_dice)),
+        union_dice_at_offset: of(&|s| Some(s.union_dice_at_offset)),
+        instance_dice: of(&|s| Some(s.instance_dice)),
+        count_right: Rate::wilson(
+            per_image.iter().filter(|(_, s)| s.count_right).count(),
+            per_image.len(),
+        ),
+        labels_found: matched_rate(&per_image, |s| (s.truth_count, s.missed.len())),
+        found_labelled: matched_rate(&per_image, |s| (s.predicted_count, s.unlabelled.len())),
+        labelled_length_found: length_share(&per_image, labelled_length_found),
+        found_length_labelled: length_share(&per_image, found_length_labelled),
+        centerline_px: of(&|s| s.centerline_px),
+        grasp_error_px: of(&|s| s.grasp_error_px),
+        stage_ms: stage_ms
+            .iter()
+            .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))
+            .collect(),
+        total_ms: stage_ms.remove("total").unwrap_or_default(),
+        per_image,
+        mask_used,
+        notes,
+    })
+}
+
+/// `image` with the cables found drawn as `detect --overlay` draws them,
+/// the labelled centre lines in white over them, and in red, each with its
+/// number, the labelled cables that no detection matches (drawn thick) and
+/// the detections that match no label.
+fn draw_comparison(
+    image: &Mat,
+    output: &VisionOutput,
+    truth: &GroundTruth,
+    image_score: &ImageScore,
+) -> opencv::Result<Mat> {
+    let red = Scalar::new(0.0, 0.0, 255.0, 0.0);
+    let label = |drawn: &mut Mat, text: &str, at: [f64; 2]| {
+        // Beside the point, kept inside the image.
+        let x = (at[0].round() as i32 + 8).clamp(0, (drawn.cols() - 150).max(0));
+        let y = (at[1].round() as i32 - 8).clamp(16, drawn.rows().max(16));
+        let at = Point::new(x, y);
+        imgproc::put_text(
+            drawn,
+            text,
+            at,
+            imgproc::FONT_HERSHEY_SIMPLEX,
+            0.6,
+            red,
+            2,
+            imgproc::LINE_AA,
+            false,
+        )
+    };
+    let mut drawn = draw_overlay(image, output)?;
+    for line in &truth.polylines_px {
+        draw_line(&mut drawn, line, Scalar::all(255.0), 1)?;
+    }
+    for missed in &image_score.missed {
+        let Some(line) = truth.polylines_px.get(missed.index) else {
+            continue;
+        };
+        draw_line(&mut drawn, line, red, 3)?;
+        if let Some(&middle) = line.get(line.len() / 2) {
+            label(&mut drawn, &format!("#{} not found", missed.index), middle)?;
+        }
+    }
+    for unlabelled in &image_score.unlabelled {
+        let cable = &output.cables[unlabelled.index];
+        label(
+            &mut drawn,
+            &format!("#{} not labelled", unlabelled.index),
+            cable.grasp_px,
+        )?;
+    }
+    Ok(drawn)
+}
+
+/// The share of one side's cables that the other side matches, from
+/// (cables on that side, unmatched ones) per image.
+fn matched_rate(
+    per_image: &[(String, ImageScore)],
+    side: impl Fn(&ImageScore) -> (usize, usize),
+) -> Option<Rate> {
+    let (all, unmatched) = per_image
+        .iter()
+        .map(|(_, s)| side(s))
+        .fold((0, 0), |(a, u), (n, m)| (a + n, u + m));
+    Rate::wilson(all - unmatched, all)
+}
+
+/// The labelled length of an image, and how much of it was found.
+pub(super) fn labelled_length_found(s: &ImageScore) -> (f64, f64) {
+    (s.labelled_length_px, s.labelled_length_found_px)
+}
+
+/// The found length of an image, and how much of it is labelled.
+pub(super) fn found_length_labelled(s: &ImageScore) -> (f64, f64) {
+    (s.found_length_px, s.found_length_labelled_px)
+}
+
+fn length_share(
+    per_image: &[(String, ImageScore)],
+    side: fn(&ImageScore) -> (f64, f64),
+) -> Option<LengthShare> {
+    let (length_px, near_px) = per_image
+        .iter()
+        .map(|(_, s)| side(s))
+        .fold((0.0, 0.0), |(a, n), (l, m)| (a + l, n + m));
+    (length_px > 0.0).then(|| LengthShare {
+        share: near_px / length_px,
+        length_px,
+    })
+}

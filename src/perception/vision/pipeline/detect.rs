@@ -1,0 +1,221 @@
+//! A run of the pipeline: the image prepared (converted, cropped to the
+//! region of interest, resized to the working width), its mask chosen,
+//! the mask's paths found, cut and filtered, splines fitted, and what
+//! was found mapped back to the image's pixels, each stage timed.
+
+use std::time::Instant;
+
+use opencv::core::{self, Mat, Rect};
+use opencv::prelude::*;
+
+use super::config::InstanceMethod;
+use super::draw::{mask_in_image, path_mask, union_mask};
+use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
+use super::output::{CableInstance, MaskInstances, VisionOutput};
+use super::straight_edge::{EDGE_NOISE_SAGITTA_PX, looks_like_edge, straight_cable};
+use super::work_area::{ToImage, clip_roi, crop, to_work_size, work_scale};
+use super::{Pipeline, ms_since};
+use crate::perception::vision::error::VisionError;
+use crate::perception::vision::spline::{self, BSpline};
+use crate::perception::vision::{mask, paths, skeleton, superpixels};
+
+impl Pipeline {
+    /// Finds the cables in a BGR image (gray, BGRA and 16-bit are accepted
+    /// and converted). `network`: how to get a network mask when the
+    /// configuration asks for one; without it `Network` is
+    /// [`VisionError::NoNetwork`] and `Auto` on a busy background (or with
+    /// a classical mask in doubt) falls back to the classical mask, saying
+    /// so in the notes.
+    pub fn detect(
+        &mut self,
+        bgr: &Mat,
+        network: Option<&mut dyn MaskNetwork>,
+    ) -> Result<VisionOutput, VisionError> {
+        let mut timings_ms = Vec::new();
+        let mut notes = Vec::new();
+        let start = Instant::now();
+        let image = mask::to_bgr8(bgr)?;
+        let full = Rect::new(0, 0, image.cols(), image.rows());
+        let roi = clip_roi(self.config.roi_px, full, &mut notes)?;
+        let cropped = crop(image, roi, full)?;
+        let scale = work_scale(full.width, self.config.work_width_px);
+        let work = to_work_size(cropped, scale)?;
+        timings_ms.push(("prepare", ms_since(start)));
+
+        let start = Instant::now();
+        let MaskChoice {
+            mask: mask_roi,
+            used: mask_used,
+            background,
+        } = choose_mask(
+            &work,
+            self.config.mask,
+            network,
+            self.config.min_blob_area_px,
+            &mut notes,
+        )?;
+        timings_ms.push(("mask", ms_since(start)));
+
+        let found = self.cables_in(&work, &mask_roi, roi, full)?;
+        timings_ms.extend(found.timings_ms);
+        if found.straight_dropped > 0 {
+            notes.push(format!(
+                "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc, or lie within {EDGE_NOISE_SAGITTA_PX} px of straight (a straight-edge radius of 0 keeps them)",
+                found.straight_dropped, self.config.straight_edge_radius_px
+            ));
+        }
+        if found.border_dropped > 0 {
+            notes.push(format!(
+                "dropped {} cable(s) that run out of view shorter than {:.0} px: too little of them is in view to grasp (a minimum border length of 0 keeps them)",
+                found.border_dropped, self.config.min_border_cable_length_px
+            ));
+        }
+        let union_mask = if self.config.cable_masks {
+            Some(union_mask(&found.cables, full)?)
+        } else {
+            None
+        };
+        Ok(VisionOutput {
+            cables: found.cables,
+            mask_used,
+            plain_background: background.plain,
+            background,
+            union_mask,
+            cable_width_px: found.cable_width_px,
+            work_scale: scale,
+            timings_ms,
+            notes,
+        })
+    }
+
+    /// The instance, spline and instance-mask stages on a given CV_8U mask
+    /// (non-zero = cable) of the whole image, ignoring the region of
+    /// interest: to test and time them on ground-truth masks.
+    pub fn instances_from_mask(&mut self, mask: &Mat) -> Result<MaskInstances, VisionError> {
+        if mask.empty() || mask.rows() <= 0 || mask.cols() <= 0 {
+            return Err(VisionError::EmptyImage { path: None });
+        }
+        if mask.typ() != core::CV_8UC1 {
+            return Err(VisionError::UnsupportedImage {
+                channels: mask.channels(),
+                depth: mask.depth(),
+            });
+        }
+        let full = Rect::new(0, 0, mask.cols(), mask.rows());
+        self.cables_in(mask, mask, full, full)
+    }
+
+    /// Instances, splines and per-cable masks for `mask_roi`, the mask of
+    /// `image_roi`, region `roi` of an image of extent `full`, perhaps
+    /// resized (see [`VisionConfig::work_width_px`]): what is found is given
+    /// in the image's pixels.
+    fn cables_in(
+        &self,
+        image_roi: &Mat,
+        mask_roi: &Mat,
+        roi: Rect,
+        full: Rect,
+    ) -> Result<MaskInstances, VisionError> {
+        let mut timings_ms = Vec::new();
+        let start = Instant::now();
+        let found = match self.config.instances {
+            // `instances_from_mask` has no image and passes the mask as one:
+            // crossings are then paired by shape alone.
+            InstanceMethod::Skeleton => skeleton::paths_from_mask(
+                mask_roi,
+                (image_roi.channels() == 3).then_some(image_roi),
+                self.config.min_cable_length_px,
+            )?,
+            InstanceMethod::Superpixels => superpixels::paths_from_mask(
+                image_roi,
+                mask_roi,
+                self.config.min_cable_length_px,
+                self.config.superpixel_widths,
+            )?,
+        };
+        let size_px = [f64::from(mask_roi.cols()), f64::from(mask_roi.rows())];
+        // A skeleton ends about half a width short of where its cable
+        // leaves the region.
+        let margin_px = found.width_px + 2.0;
+        let at_border = |p: &[f64; 2]| paths::near_border(*p, size_px, margin_px);
+        let paths: Vec<_> = found
+            .paths
+            .iter()
+            .filter(|path| {
+                let ends = [path.points_px.first(), path.points_px.last()];
+                path.length_px >= self.config.min_border_cable_length_px
+                    || !ends.into_iter().flatten().any(at_border)
+            })
+            .collect();
+        let border_dropped = found.paths.len() - paths.len();
+        timings_ms.push(("instances", ms_since(start)));
+
+        let start = Instant::now();
+        let to_image = ToImage::new(roi, size_px);
+        let mut fitted = Vec::new();
+        let mut straight_dropped = 0;
+        let mut plain_around = None;
+        for path in paths {
+            let n = spline::control_points_for_length(path.length_px);
+            let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
+                continue;
+            };
+            let samples_px = spline.sample(self.config.samples_per_cable);
+            if looks_like_edge(
+                &samples_px,
+                path.length_px,
+                self.config.straight_edge_radius_px,
+            ) && !straight_cable(
+                image_roi,
+                mask_roi,
+                &samples_px,
+                found.width_px,
+                &mut plain_around,
+            )? {
+                straight_dropped += 1;
+                continue;
+            }
+            // A B-spline's points move with its control points under an
+            // affine map: the spline fitted in working pixels becomes the
+            // image's by moving them.
+            for c in &mut spline.control_points_px {
+                *c = to_image.point(*c);
+            }
+            let samples_px: Vec<_> = samples_px.into_iter().map(|p| to_image.point(p)).collect();
+            let grasp_px = spline.point(0.5);
+            let direction_rad = spline.grasp_direction_rad();
+            fitted.push((path, spline, samples_px, grasp_px, direction_rad));
+        }
+        timings_ms.push(("spline", ms_since(start)));
+
+        let start = Instant::now();
+        let thickness = (1.5 * found.width_px).ceil().max(1.0) as i32 + 2;
+        let mut cables = Vec::with_capacity(fitted.len());
+        for (path, spline, samples_px, grasp_px, direction_rad) in fitted {
+            let mask = if self.config.cable_masks {
+                let own = path_mask(mask_roi, &path.points_px, thickness)?;
+                Some(mask_in_image(&own, roi, full)?)
+            } else {
+                None
+            };
+            cables.push(CableInstance {
+                spline,
+                samples_px,
+                grasp_px,
+                direction_rad,
+                length_px: path.length_px * to_image.length_scale(),
+                mask,
+            });
+        }
+        if self.config.cable_masks {
+            timings_ms.push(("instance_masks", ms_since(start)));
+        }
+        Ok(MaskInstances {
+            cables,
+            cable_width_px: found.width_px * to_image.length_scale(),
+            straight_dropped,
+            border_dropped,
+            timings_ms,
+        })
+    }
+}

@@ -1,0 +1,105 @@
+//! Which mask a run takes: the classical threshold where the background
+//! is plain and its mask not in doubt, else the segmentation network, or,
+//! with no network, the classical mask with a note that says what to
+//! expect of it.
+
+use opencv::core::Mat;
+use opencv::prelude::*;
+
+use super::config::MaskMethod;
+use crate::perception::vision::error::{VisionError, cv};
+use crate::perception::vision::mask::{self, BackgroundStats};
+
+/// A segmentation network that gives the cables' mask; implemented by the
+/// ONNX network so that the pipeline does not depend on its runtime.
+pub trait MaskNetwork {
+    /// The cables' mask for a BGR 8-bit image: one channel, the image's size
+    /// (or any size: it is resized), 8-bit 0/255 (or 0/1) or 32-bit float
+    /// probabilities.
+    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError>;
+}
+
+/// The mask a run takes, the method that made it (`Classical` or
+/// `Network`), and the background statistics behind the choice.
+pub(super) struct MaskChoice {
+    pub mask: Mat,
+    pub used: MaskMethod,
+    pub background: BackgroundStats,
+}
+
+/// The mask-choice policy, on the image as worked on (`work`, BGR):
+/// - `Network`: the network's mask; without a network,
+///   [`VisionError::NoNetwork`].
+/// - `Auto`: the network's mask on a background that is not plain; on a
+///   plain one, the classical mask unless it is in doubt
+///   ([`mask::classical_doubt`]), then the network's. Without a network,
+///   the classical mask, with a note in `notes` when it was not the
+///   policy's choice.
+/// - `Classical`: the classical mask.
+///
+/// Masks are cleaned of blobs smaller than `min_blob_area_px`.
+pub(super) fn choose_mask(
+    work: &Mat,
+    method: MaskMethod,
+    network: Option<&mut dyn MaskNetwork>,
+    min_blob_area_px: f64,
+    notes: &mut Vec<String>,
+) -> Result<MaskChoice, VisionError> {
+    let background = mask::background_stats(work)?;
+    let network_mask = |net: &mut dyn MaskNetwork| network_mask(net, work, min_blob_area_px);
+    let (mask, used, background) = match (method, network) {
+        (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
+        (MaskMethod::Network, Some(net)) => (network_mask(net)?, MaskMethod::Network, background),
+        (MaskMethod::Auto, Some(net)) if !background.plain => {
+            (network_mask(net)?, MaskMethod::Network, background)
+        }
+        (method, network) => {
+            let auto = method == MaskMethod::Auto;
+            if auto && !background.plain {
+                notes.push(format!(
+                    "background not plain ({:.0}% of pixels near its colour, plain needs {:.0}%) and no network given: used the classical mask, expect clutter in it",
+                    100.0 * background.near_fraction,
+                    100.0 * mask::PLAIN_MIN_FRACTION
+                ));
+            }
+            let (m, stats) = mask::classical_mask(work, &background, min_blob_area_px)?;
+            let doubt = if auto && stats.plain {
+                mask::classical_doubt(&m, &stats)?
+            } else {
+                None
+            };
+            match (doubt, network) {
+                (Some(why), Some(net)) => {
+                    notes.push(format!("plain background, but {why}: used the network"));
+                    (network_mask(net)?, MaskMethod::Network, stats)
+                }
+                (doubt, _) => {
+                    if let Some(why) = doubt {
+                        notes.push(format!(
+                            "plain background, but {why}, and no network given: used the classical mask, expect cables cut along their length or in pieces"
+                        ));
+                    }
+                    (m, MaskMethod::Classical, stats)
+                }
+            }
+        }
+    };
+    Ok(MaskChoice {
+        mask,
+        used,
+        background,
+    })
+}
+
+/// The network's mask of `work`, binarized to its size and cleaned of
+/// blobs smaller than `min_blob_area_px`.
+fn network_mask(
+    net: &mut dyn MaskNetwork,
+    work: &Mat,
+    min_blob_area_px: f64,
+) -> Result<Mat, VisionError> {
+    let raw = net.mask(work)?;
+    let size = work.size().map_err(cv("image size"))?;
+    let binary = mask::binarize_network_mask(&raw, size)?;
+    mask::clean_mask(&binary, min_blob_area_px)
+}

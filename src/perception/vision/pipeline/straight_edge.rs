@@ -1,0 +1,159 @@
+//! Straight detections dropped as edges: the network takes edges of
+//! paper, folders and tables for cables, and a cable lying loose is never
+//! that straight (see [`VisionConfig::straight_edge_radius_px`]). On a
+//! background plain around each pixel, a straight detection whose two
+//! sides are alike is a taut cable, kept.
+//!
+//! [`VisionConfig::straight_edge_radius_px`]: super::VisionConfig::straight_edge_radius_px
+
+use opencv::core::Mat;
+use opencv::prelude::*;
+
+use crate::perception::vision::error::VisionError;
+use crate::perception::vision::{mask, paths, spline};
+
+/// How far from straight an edge's detection can be: mask noise and lens
+/// distortion bend a paper edge's by up to 2 px in cables-dev; a cable that
+/// departs more from its chord is visibly bent, however long.
+const EDGE_MAX_SAGITTA_PX: f64 = 3.0;
+
+/// Within this of straight, a detection's shape cannot tell it from an
+/// edge, however short: mask noise alone bends edges' detections this much
+/// (0.6 to 1.7 px in cables-dev; its wire pieces depart 2.2 px or more).
+pub(super) const EDGE_NOISE_SAGITTA_PX: f64 = 1.5;
+
+/// Whether a detection (points along it, `length_px` long) is straight
+/// enough to be an edge (never when `radius_px` is 0): within
+/// [`EDGE_MAX_SAGITTA_PX`] of its chord and bending less than an arc of
+/// `radius_px`, or within [`EDGE_NOISE_SAGITTA_PX`] of its chord.
+pub(super) fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bool {
+    let sagitta_px = spline::chord_sagitta_px(points_px);
+    radius_px > 0.0
+        && sagitta_px < EDGE_MAX_SAGITTA_PX
+        && (sagitta_px < EDGE_NOISE_SAGITTA_PX
+            || spline::arc_radius_px(length_px, sagitta_px) > radius_px)
+}
+
+/// On a background plain around each pixel, a straight detection is a
+/// cable, not an edge, when the background's colours either side of it
+/// differ by less than this share of the smaller difference between the
+/// detection and either side. An edge's sides differ: the paper and table
+/// edges taken for cables in cables-dev's photographs (on busy
+/// backgrounds) score 1.0 and 1.25. A cable's do not: about as many
+/// rendered straight detections are kept at any share from 0.3 to 1.5
+/// (docs/vision.md, "Straight cables on a plain table").
+pub(super) const EDGE_SIDES_RATIO: f64 = 0.5;
+/// Where each side's background is read, in cable widths from the
+/// detection's centre line: clear of the cable and its shading.
+const SIDE_OFFSETS_WIDTHS: [f64; 2] = [1.0, 1.5];
+
+/// Whether a straight detection (points along it, cables `width_px`
+/// wide) is a cable, not an edge: the BGR `image`'s background is alike
+/// on the detection's two sides and plain around each pixel
+/// ([`mask::plain_locally`], the dearer test, asked second and kept in
+/// `plain_around` for the image once asked). Not when the image's colour
+/// is unknown.
+pub(super) fn straight_cable(
+    image: &Mat,
+    mask: &Mat,
+    points_px: &[[f64; 2]],
+    width_px: f64,
+    plain_around: &mut Option<bool>,
+) -> Result<bool, VisionError> {
+    if image.channels() != 3 {
+        return Ok(false);
+    }
+    if !sides_alike(image, mask, points_px, width_px)? {
+        return Ok(false);
+    }
+    match *plain_around {
+        Some(plain) => Ok(plain),
+        None => Ok(*plain_around.insert(mask::plain_locally(image)?)),
+    }
+}
+
+/// Whether the BGR `image`'s background, off `mask`, is alike on the two
+/// sides of a detection (points along it, cables `width_px` wide; see
+/// [`EDGE_SIDES_RATIO`]). Not when a side is unknown.
+fn sides_alike(
+    image: &Mat,
+    mask: &Mat,
+    points_px: &[[f64; 2]],
+    width_px: f64,
+) -> Result<bool, VisionError> {
+    let in_image = |p: &[f64; 2]| {
+        (0.0..f64::from(image.cols())).contains(&p[0].round())
+            && (0.0..f64::from(image.rows())).contains(&p[1].round())
+    };
+    let in_background = |p: [f64; 2]| {
+        in_image(&p)
+            && mask
+                .at_2d::<u8>(p[1].round() as i32, p[0].round() as i32)
+                .is_ok_and(|&v| v == 0)
+    };
+    let mut sides = [Vec::new(), Vec::new()];
+    for w in points_px.windows(3) {
+        let Some(along) = paths::unit(w[0], w[2]) else {
+            continue;
+        };
+        let across = [-along[1], along[0]];
+        for offset in SIDE_OFFSETS_WIDTHS.map(|k| k * width_px) {
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                let p = [
+                    w[1][0] + sign * offset * across[0],
+                    w[1][1] + sign * offset * across[1],
+                ];
+                if in_background(p) {
+                    side.push(p);
+                }
+            }
+        }
+    }
+    let on_image: Vec<[f64; 2]> = points_px.iter().copied().filter(in_image).collect();
+    let [left, right] = &sides;
+    let colours = (
+        paths::median_colour_lab(image, left)?,
+        paths::median_colour_lab(image, right)?,
+        paths::median_colour_lab(image, &on_image)?,
+    );
+    let (Some(left), Some(right), Some(middle)) = colours else {
+        return Ok(false);
+    };
+    let to_middle = paths::delta_e(middle, left).min(paths::delta_e(middle, right));
+    Ok(paths::delta_e(left, right) < EDGE_SIDES_RATIO * to_middle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perception::vision::curves::arc_px;
+
+    #[test]
+    fn an_edge_bends_less_than_the_radius_or_no_more_than_mask_noise() {
+        use std::f64::consts::FRAC_PI_2;
+        // A piece of a circle, `length_px` long, as points.
+        let piece = |length_px: f64, radius_px: f64| {
+            let half_rad = length_px / radius_px / 2.0;
+            let points = arc_px(
+                [0.0, radius_px],
+                radius_px,
+                -FRAC_PI_2 - half_rad,
+                -FRAC_PI_2 + half_rad,
+            );
+            (points, length_px)
+        };
+        let edge = |(points, length_px): (Vec<[f64; 2]>, f64), radius_px| {
+            looks_like_edge(&points, length_px, radius_px)
+        };
+        // 300 px, 2.25 px from straight: a paper edge, unless kept.
+        assert!(edge(piece(300.0, 5000.0), 1500.0));
+        assert!(!edge(piece(300.0, 5000.0), 0.0));
+        // 300 px, 11 px from straight: a cable.
+        assert!(!edge(piece(300.0, 1000.0), 1500.0));
+        // 70 px, 1.2 px from straight (a 500 px arc): too short for its bend
+        // to tell it from an edge's noisy detection.
+        assert!(edge(piece(70.0, 500.0), 1500.0));
+        // 110 px, 2.5 px from straight: a piece of cable.
+        assert!(!edge(piece(110.0, 600.0), 1500.0));
+    }
+}

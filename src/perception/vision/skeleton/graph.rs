@@ -1,0 +1,359 @@
+//! The skeleton as a graph: end points and junctions are its nodes, the
+//! pixel runs between them its edges. Spurs are pruned, and junctions
+//! that are one crossing merged.
+
+use std::collections::HashSet;
+
+use super::direction::{bend_rad, direction_leaving};
+use super::thin::Grid;
+use crate::perception::vision::paths::polyline_length;
+
+/// Junctions joined by an edge shorter than this many cable widths are one
+/// crossing: two cables crossing at 25° overlap for about 2.4 widths.
+const MERGE_WIDTHS: f64 = 2.5;
+
+/// Junctions up to this many cable widths apart may still be one crossing
+/// (two cables crossing at 10° overlap for about six widths; 10 px cables
+/// bending opposite ways through 29° left junctions 8.6 widths apart), when
+/// their shape says so (see `Graph::merge_junctions`).
+const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
+
+/// How straight both outer branches of a split crossing's junction must run
+/// on into the edge between the junctions. That edge runs between the two
+/// cables, so a cable that bends through the crossing leaves it at up to
+/// 45° (0.6 rad split 3 crossings of the training photographs wrongly).
+const SPLIT_CONTINUE_RAD: f64 = 0.9;
+
+/// A run of skeleton that leaves a crossing and returns to it is a loop of
+/// one cable, not the lens between two cables crossing twice, when it is
+/// this many times longer than the run the two strands share.
+const LOOP_TO_OVERLAP: f64 = 3.0;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum NodeKind {
+    End,
+    Junction,
+}
+
+pub(super) struct Node {
+    pub kind: NodeKind,
+    pub centre_px: [f64; 2],
+}
+
+pub(super) struct Edge {
+    /// Node at each end.
+    pub ends: [usize; 2],
+    /// From the pixel of `ends[0]` it leaves to the pixel of `ends[1]`.
+    pub pixels: Vec<usize>,
+    pub length_px: f64,
+    pub alive: bool,
+    /// Inside a merged junction: not a branch of it.
+    pub internal: bool,
+}
+
+/// A branch of a junction: an edge and which of its ends is at the
+/// junction.
+pub(super) type Branch = (usize, usize);
+
+const NONE: usize = usize::MAX;
+
+pub(super) struct Graph {
+    pub grid: Grid,
+    pub nodes: Vec<Node>,
+    pub edges: Vec<Edge>,
+    /// Paths that are closed loops of skeleton with no node on them.
+    pub loops: Vec<Vec<usize>>,
+}
+
+impl Graph {
+    pub(super) fn build(grid: Grid, skeleton: &[usize]) -> Graph {
+        let mut node_of = vec![NONE; grid.on.len()];
+        let mut nodes = Vec::new();
+        let mut node_pixels: Vec<Vec<usize>> = Vec::new();
+        for &i in skeleton {
+            if node_of[i] != NONE {
+                continue;
+            }
+            let degree = grid.degree(i);
+            if degree == 1 {
+                node_of[i] = nodes.len();
+                nodes.push(Node {
+                    kind: NodeKind::End,
+                    centre_px: grid.xy(i),
+                });
+                node_pixels.push(vec![i]);
+            } else if degree >= 3 {
+                // A junction: all 8-adjacent junction pixels together.
+                let id = nodes.len();
+                let mut cluster = vec![i];
+                node_of[i] = id;
+                let mut k = 0;
+                while k < cluster.len() {
+                    let c = cluster[k];
+                    k += 1;
+                    for j in grid.neighbours(c) {
+                        if node_of[j] == NONE && grid.degree(j) >= 3 {
+                            node_of[j] = id;
+                            cluster.push(j);
+                        }
+                    }
+                }
+                let n = cluster.len() as f64;
+                let sum = cluster.iter().fold([0.0, 0.0], |acc, &c| {
+                    let p = grid.xy(c);
+                    [acc[0] + p[0], acc[1] + p[1]]
+                });
+                nodes.push(Node {
+                    kind: NodeKind::Junction,
+                    centre_px: [sum[0] / n, sum[1] / n],
+                });
+                node_pixels.push(cluster);
+            }
+        }
+
+        let mut visited = vec![false; grid.on.len()];
+        let mut edges = Vec::new();
+        let mut direct: std::collections::HashSet<(usize, usize)> =
+            std::collections::HashSet::new();
+        for (n, pixels) in node_pixels.iter().enumerate() {
+            for &p in pixels {
+                for q in grid.neighbours(p) {
+                    let m = node_of[q];
+                    if m != NONE {
+                        if m != n && direct.insert((n.min(m), n.max(m))) {
+                            edges.push(Edge {
+                                ends: [n, m],
+                                pixels: vec![p, q],
+                                length_px: 1.0,
+                                alive: true,
+                                internal: false,
+                            });
+                        }
+                        continue;
+                    }
+                    if visited[q] {
+                        continue;
+                    }
+                    let mut pixels = vec![p, q];
+                    visited[q] = true;
+                    let (mut prev, mut cur) = (p, q);
+                    let end = loop {
+                        let next = grid.neighbours(cur).find(|&r| {
+                            r != prev
+                                && (node_of[r] != NONE || !visited[r])
+                                && !(r == p && pixels.len() == 2)
+                        });
+                        match next {
+                            Some(r) if node_of[r] != NONE => {
+                                pixels.push(r);
+                                break node_of[r];
+                            }
+                            Some(r) => {
+                                visited[r] = true;
+                                pixels.push(r);
+                                prev = cur;
+                                cur = r;
+                            }
+                            None => {
+                                // A dead end no node marks (cannot happen on a
+                                // clean skeleton): make it an end.
+                                nodes.push(Node {
+                                    kind: NodeKind::End,
+                                    centre_px: grid.xy(cur),
+                                });
+                                break nodes.len() - 1;
+                            }
+                        }
+                    };
+                    let pts: Vec<[f64; 2]> = pixels.iter().map(|&i| grid.xy(i)).collect();
+                    edges.push(Edge {
+                        ends: [n, end],
+                        pixels,
+                        length_px: polyline_length(&pts),
+                        alive: true,
+                        internal: false,
+                    });
+                }
+            }
+        }
+
+        // Closed loops of skeleton with no node: trace each once.
+        let mut loops = Vec::new();
+        for &i in skeleton {
+            if node_of[i] != NONE || visited[i] {
+                continue;
+            }
+            let mut pixels = vec![i];
+            visited[i] = true;
+            let mut cur = i;
+            while let Some(r) = grid
+                .neighbours(cur)
+                .find(|&r| !visited[r] && node_of[r] == NONE)
+            {
+                visited[r] = true;
+                pixels.push(r);
+                cur = r;
+            }
+            loops.push(pixels);
+        }
+        Graph {
+            grid,
+            nodes,
+            edges,
+            loops,
+        }
+    }
+
+    fn degrees(&self) -> Vec<usize> {
+        let mut degree = vec![0; self.nodes.len()];
+        for e in self.edges.iter().filter(|e| e.alive && !e.internal) {
+            degree[e.ends[0]] += 1;
+            degree[e.ends[1]] += 1;
+        }
+        degree
+    }
+
+    /// Drops spurs (end-to-junction edges shorter than `spur_px`), shortest
+    /// first, as long as their junction keeps at least two other branches.
+    pub(super) fn prune_spurs(&mut self, spur_px: f64) {
+        let mut degree = self.degrees();
+        let mut spurs: Vec<usize> = (0..self.edges.len())
+            .filter(|&e| {
+                let edge = &self.edges[e];
+                let kinds = edge.ends.map(|n| self.nodes[n].kind);
+                edge.length_px < spur_px
+                    && kinds.contains(&NodeKind::End)
+                    && kinds.contains(&NodeKind::Junction)
+            })
+            .collect();
+        spurs.sort_by(|&a, &b| self.edges[a].length_px.total_cmp(&self.edges[b].length_px));
+        for e in spurs {
+            let ends = self.edges[e].ends;
+            let junction = if self.nodes[ends[0]].kind == NodeKind::Junction {
+                ends[0]
+            } else {
+                ends[1]
+            };
+            if degree[junction] >= 3 {
+                self.edges[e].alive = false;
+                degree[junction] -= 1;
+            }
+        }
+    }
+
+    /// Merges junctions that are one crossing; returns each node's merged
+    /// junction (its root). Two junctions are one crossing when the edge
+    /// joining them is shorter than [`MERGE_WIDTHS`] cable widths, or when
+    /// it is shorter than [`SPLIT_CROSSING_WIDTHS`] and both are 3-way
+    /// junctions whose two other branches both run on into it (within
+    /// [`SPLIT_CONTINUE_RAD`]): the shape of two cables crossing at a
+    /// shallow angle (or running together for a while), unlike a cable end
+    /// touching another's side. So are two 3-way junctions joined by that
+    /// short edge and a run [`LOOP_TO_OVERLAP`] times longer: a cable
+    /// looping across itself.
+    pub(super) fn merge_junctions(&mut self, width_px: f64) -> Vec<usize> {
+        let mut parent: Vec<usize> = (0..self.nodes.len()).collect();
+        fn root(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        let mut incident: Vec<Vec<Branch>> = vec![Vec::new(); self.nodes.len()];
+        for (e, edge) in self.edges.iter().enumerate() {
+            if edge.alive {
+                incident[edge.ends[0]].push((e, 0));
+                incident[edge.ends[1]].push((e, 1));
+            }
+        }
+        let is_junction = |n: usize| self.nodes[n].kind == NodeKind::Junction;
+        // The lengths of the runs of skeleton from junction `a` to `b`.
+        let runs_between = |a: usize, b: usize| -> Vec<f64> {
+            incident[a]
+                .iter()
+                .filter(|&&(e, side)| self.edges[e].ends[1 - side] == b)
+                .map(|&(e, _)| self.edges[e].length_px)
+                .collect()
+        };
+        let mut merge = Vec::new();
+        let mut loop_overlaps = Vec::new();
+        for (e, edge) in self.edges.iter().enumerate() {
+            let [a, b] = edge.ends;
+            if !edge.alive || !is_junction(a) || !is_junction(b) {
+                continue;
+            }
+            let short = edge.length_px < MERGE_WIDTHS * width_px;
+            let split_crossing = a != b
+                && edge.length_px < SPLIT_CROSSING_WIDTHS * width_px
+                && [(a, 0), (b, 1)].iter().all(|&(n, side)| {
+                    let branches = &incident[n];
+                    if branches.len() != 3 {
+                        return false;
+                    }
+                    let centre = self.nodes[n].centre_px;
+                    let into = self.branch_direction((e, side), centre, width_px);
+                    branches.iter().filter(|&&br| br != (e, side)).all(|&br| {
+                        bend_rad(self.branch_direction(br, centre, width_px), into)
+                            < SPLIT_CONTINUE_RAD
+                    })
+                });
+            // Joined by this run and a far longer one: a cable that loops
+            // back across itself at a shallow angle, this run where its two
+            // strands overlap. (Two cables crossing twice join their
+            // crossings by runs of like length.)
+            let loop_overlap = a != b
+                && edge.length_px < SPLIT_CROSSING_WIDTHS * width_px
+                && incident[a].len() == 3
+                && incident[b].len() == 3
+                && match runs_between(a, b)[..] {
+                    [r, s] => r.max(s) > LOOP_TO_OVERLAP * r.min(s),
+                    _ => false,
+                };
+            if short || split_crossing {
+                merge.push(e);
+            } else if loop_overlap {
+                loop_overlaps.push(e);
+            }
+        }
+        // A loop's overlap is one crossing only between junctions that are
+        // no part of another: when the loop passes through a crossing with
+        // another cable, the far longer run may be the rest of the loop
+        // beyond it.
+        let merged: HashSet<usize> = merge.iter().flat_map(|&e| self.edges[e].ends).collect();
+        merge.extend(loop_overlaps.into_iter().filter(|&e| {
+            let [a, b] = self.edges[e].ends;
+            !merged.contains(&a) && !merged.contains(&b)
+        }));
+        for e in merge {
+            let [a, b] = self.edges[e].ends;
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra] = rb;
+            self.edges[e].internal = true;
+        }
+        (0..self.nodes.len())
+            .map(|i| root(&mut parent, i))
+            .collect()
+    }
+
+    /// Pixels of a branch going out of its junction.
+    pub(super) fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
+        let px = &self.edges[e].pixels;
+        let mut pts: Vec<[f64; 2]> = px.iter().map(|&i| self.grid.xy(i)).collect();
+        if side == 1 {
+            pts.reverse();
+        }
+        pts
+    }
+
+    /// The branch's direction leaving the junction (see
+    /// [`direction_stretch`]).
+    pub(super) fn branch_direction(
+        &self,
+        branch: Branch,
+        centre: [f64; 2],
+        width_px: f64,
+    ) -> [f64; 2] {
+        direction_leaving(&self.outward(branch), centre, width_px)
+    }
+}

@@ -1,0 +1,250 @@
+//! Pairing a junction's branches: a cable goes on through a crossing as
+//! it bends and keeps its colour, so the branches are paired at least
+//! total cost of bending and colour difference; a loop's two ends are not
+//! paired with each other.
+
+use std::collections::HashMap;
+
+use opencv::core::Mat;
+
+use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
+use super::graph::{Branch, Graph, NodeKind};
+use crate::perception::vision::error::VisionError;
+use crate::perception::vision::paths::{delta_e, median_colour_lab};
+
+/// Cost, in radians of bending, of leaving a branch unpaired at a junction
+/// (the cable ends there). Two branches are joined rather than both left
+/// unpaired when their bend is under twice this (about 140°).
+pub(super) const UNPAIRED_COST_RAD: f64 = 1.2;
+
+/// Cost, in radians of bending, of pairing two branches at a crossing
+/// whose colours differ by [`COLOUR_FULL_DELTA_E`] or more (less in
+/// proportion): where two cables of different colours cross at a shallow
+/// angle or bend through the crossing, their shapes alone can pair the
+/// wrong branches. Less than [`UNPAIRED_COST_RAD`], so that shading and
+/// highlights, which change a cable's colour along it, do not cut it.
+const COLOUR_COST_RAD: f64 = 1.0;
+
+/// Colour differences (CIE76 ΔE, in OpenCV's 8-bit Lab) up to this cost
+/// nothing: a cable's own colour varies so much along it with shading and
+/// noise, and a branch too short to show its colour must not be preferred
+/// to one of nearly the same colour.
+const COLOUR_SAME_DELTA_E: f64 = 10.0;
+
+/// A colour difference that costs the whole of [`COLOUR_COST_RAD`] (red
+/// against orange is about 40); between this and [`COLOUR_SAME_DELTA_E`]
+/// the cost grows in proportion.
+const COLOUR_FULL_DELTA_E: f64 = 40.0;
+
+/// Above this many branches at one junction the exact least-cost pairing
+/// is too costly and pairs are taken greedily, cheapest first.
+const MAX_EXACT_BRANCHES: usize = 8;
+
+/// Each junction branch's partner: at every merged junction (`root`
+/// gives each node's), its branches paired at least cost, by bending and,
+/// given the BGR `image` the mask was found in, by colour. Branches left
+/// unpaired have none: the cable ends there.
+pub(super) fn pair_branches(
+    graph: &Graph,
+    root: &[usize],
+    image: Option<&Mat>,
+    width_px: f64,
+) -> Result<HashMap<Branch, Branch>, VisionError> {
+    let mut branches: HashMap<usize, Vec<Branch>> = HashMap::new();
+    for (e, edge) in graph.edges.iter().enumerate() {
+        if !edge.alive || edge.internal {
+            continue;
+        }
+        for side in 0..2 {
+            let n = edge.ends[side];
+            if graph.nodes[n].kind == NodeKind::Junction {
+                branches.entry(root[n]).or_default().push((e, side));
+            }
+        }
+    }
+    let mut partner: HashMap<Branch, Branch> = HashMap::new();
+    let mut junctions: Vec<usize> = branches.keys().copied().collect();
+    junctions.sort_unstable();
+    for j in &junctions {
+        let list = &branches[j];
+        let centre = graph.nodes[*j].centre_px;
+        let pairs = if list.len() == 2 {
+            vec![(0, 1)]
+        } else {
+            let outward: Vec<_> = list.iter().map(|&b| graph.outward(b)).collect();
+            let mut cost = bend_costs(&outward, centre, width_px);
+            if let Some(image) = image {
+                let colours = branch_colours_lab(&outward, image, width_px)?;
+                add_colour_costs(&mut cost, &colours);
+            }
+            forbid_closing_loops(&mut cost, list);
+            best_pairing(&cost)
+        };
+        for (a, b) in pairs {
+            partner.insert(list[a], list[b]);
+            partner.insert(list[b], list[a]);
+        }
+    }
+    Ok(partner)
+}
+
+/// The bend of joining each two branches at a junction at `centre`, given
+/// each branch's pixels going out of it.
+fn bend_costs(outward: &[Vec<[f64; 2]>], centre: [f64; 2], width_px: f64) -> Vec<Vec<f64>> {
+    let dirs: Vec<[f64; 2]> = outward
+        .iter()
+        .map(|pts| tangent_at_centre(pts, centre, width_px))
+        .collect();
+    dirs.iter()
+        .map(|&a| dirs.iter().map(|&b| bend_rad(a, b)).collect())
+        .collect()
+}
+
+/// Each branch's colour in Lab past the crossing, given its pixels going
+/// out of it, where the other cable neither covers nor shades it: under
+/// its skeleton from 2.75 to 4.75 cable widths out (the stretch that
+/// [`tangent_at_centre`] follows), or over the last width of a shorter
+/// branch (see [`median_colour_lab`]). `None` for a branch that ends
+/// inside the crossing.
+fn branch_colours_lab(
+    outward: &[Vec<[f64; 2]>],
+    image: &Mat,
+    width_px: f64,
+) -> Result<Vec<Option<[f64; 3]>>, VisionError> {
+    let (skip, span) = direction_stretch(width_px);
+    outward
+        .iter()
+        .map(|pts| {
+            let to = pts.len().min(skip + 2 * span);
+            let from = (skip + span).min(to.saturating_sub(span / 2)).max(skip);
+            match pts.get(from..to) {
+                Some(stretch) => median_colour_lab(image, stretch),
+                None => Ok(None),
+            }
+        })
+        .collect()
+}
+
+/// Adds to each pairing's bend the cost of the two branches' colour
+/// difference (see [`COLOUR_COST_RAD`]); branches of unknown colour cost
+/// nothing more.
+fn add_colour_costs(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
+    for (row, a) in cost.iter_mut().zip(colours_lab) {
+        for (c, b) in row.iter_mut().zip(colours_lab) {
+            if let (Some(a), Some(b)) = (a, b) {
+                let over = (delta_e(*a, *b) - COLOUR_SAME_DELTA_E)
+                    / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
+                *c += COLOUR_COST_RAD * over.clamp(0.0, 1.0);
+            }
+        }
+    }
+}
+
+/// Forbids pairing a crossing's two branches that are the ends of one edge,
+/// when the crossing has four branches: a cable that loops back across
+/// itself leaves the crossing along the loop and returns along it, so
+/// joining the loop's two ends would close it into a ring with no ends,
+/// which no cable is, and leave the rest of the cable as another. Where
+/// more cables' crossings are merged into one junction, such an edge may
+/// run between two of them, and the bends measured at one centre decide.
+fn forbid_closing_loops(cost: &mut [Vec<f64>], branches: &[Branch]) {
+    if branches.len() != 4 {
+        return;
+    }
+    for (i, a) in branches.iter().enumerate() {
+        for (j, b) in branches.iter().enumerate() {
+            if i != j && a.0 == b.0 {
+                cost[i][j] = f64::INFINITY;
+            }
+        }
+    }
+}
+
+/// Least total cost pairing of `k` branches where `cost[i][j]` is the cost
+/// of joining i and j (their bend, plus any colour difference's cost) and
+/// leaving one unpaired costs [`UNPAIRED_COST_RAD`].
+fn best_pairing(cost: &[Vec<f64>]) -> Vec<(usize, usize)> {
+    let k = cost.len();
+    if k > MAX_EXACT_BRANCHES {
+        let mut candidates: Vec<(f64, usize, usize)> = (0..k)
+            .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
+            .map(|(i, j)| (cost[i][j], i, j))
+            .filter(|c| c.0 < 2.0 * UNPAIRED_COST_RAD)
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut used = vec![false; k];
+        let mut pairs = Vec::new();
+        for (_, i, j) in candidates {
+            if !used[i] && !used[j] {
+                used[i] = true;
+                used[j] = true;
+                pairs.push((i, j));
+            }
+        }
+        return pairs;
+    }
+    fn search(
+        cost: &[Vec<f64>],
+        free: u32,
+        acc: f64,
+        pairs: &mut Vec<(usize, usize)>,
+        best: &mut (f64, Vec<(usize, usize)>),
+    ) {
+        if acc >= best.0 {
+            return;
+        }
+        if free == 0 {
+            *best = (acc, pairs.clone());
+            return;
+        }
+        let i = free.trailing_zeros() as usize;
+        let rest = free & !(1 << i);
+        search(cost, rest, acc + UNPAIRED_COST_RAD, pairs, best);
+        let mut others = rest;
+        while others != 0 {
+            let j = others.trailing_zeros() as usize;
+            others &= !(1 << j);
+            pairs.push((i, j));
+            search(cost, rest & !(1 << j), acc + cost[i][j], pairs, best);
+            pairs.pop();
+        }
+    }
+    let mut best = (f64::INFINITY, Vec::new());
+    search(cost, (1u32 << k) - 1, 0.0, &mut Vec::new(), &mut best);
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colour_costs_pair_like_colours_and_let_shading_pass() {
+        // Three branches: 0 and 1 continue each other a little better than
+        // 0 and 2, by shape.
+        let pi = std::f64::consts::PI;
+        let bends = || {
+            vec![
+                vec![pi, 0.30, 0.35],
+                vec![0.30, pi, 2.5],
+                vec![0.35, 2.5, pi],
+            ]
+        };
+        let black = Some([10.0, 128.0, 128.0]);
+        let shaded_black = Some([18.0, 127.0, 129.0]);
+        let red = Some([130.0, 190.0, 170.0]);
+        // Branch 1 red, 0 and 2 black: colour pairs 0 with 2.
+        let mut cost = bends();
+        add_colour_costs(&mut cost, &[black, red, black]);
+        assert_eq!(best_pairing(&cost), vec![(0, 2)]);
+        assert!((cost[0][1] - (0.30 + COLOUR_COST_RAD)).abs() < 1e-9);
+        // A shading difference, or a branch of unknown colour, costs
+        // nothing: shape decides.
+        for colours in [[black, shaded_black, black], [black, None, black]] {
+            let mut cost = bends();
+            add_colour_costs(&mut cost, &colours);
+            assert_eq!(cost, bends());
+            assert_eq!(best_pairing(&cost), vec![(0, 1)]);
+        }
+    }
+}
