@@ -207,6 +207,24 @@ fn a_touch_only_task_without_a_prior_is_refused_at_its_line() {
         stderr.contains("bad.toml:8:1: task.touch_only: a touch-only task searches"),
         "{stderr}"
     );
+    // The prior's values are range-checked at their line.
+    let task = task_copy(dir.path(), "bad-sigma.toml", |t| {
+        t.replace("position_sigma_mm = 5.0", "position_sigma_mm = -5.0")
+    });
+    let written = std::fs::read_to_string(&task).unwrap();
+    let line = 1 + written
+        .lines()
+        .position(|l| l.starts_with("position_sigma_mm"))
+        .unwrap();
+    let out = cablecell(&["check", text(&task)]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "bad-sigma.toml:{line}:21: prior.position_sigma_mm: expected a number > 0"
+        )),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -235,4 +253,38 @@ fn the_touch_only_campaign_counts_search_moves() {
             .all(|line| line.contains("\"search_moves\":1")),
         "{journal}"
     );
+}
+
+#[test]
+fn a_miss_is_recorded_as_a_grasp_that_a_replay_fits_again() {
+    use cablecell::orchestrator::Runner;
+    use cablecell::perception::tactile::{Estimator, FitError};
+    use cablecell::recording::replay::Replay;
+    use cablecell::recording::{Recording, Topic};
+
+    let dir = tempfile::tempdir().unwrap();
+    // A threshold above any Δv: the pad feels nothing even when the jaws
+    // hold the cable. The prior's poses are 0, +10.65 and −10.65 mm; the
+    // cable, 5 mm below the mean, is caught by the first and the third.
+    let mut task = cablecell::task::load_task(&common::root().join("tasks/regrasp.toml")).unwrap();
+    task.task.touch_only = true;
+    task.tactile.contact_threshold_v = 3.0;
+    let cell = cablecell::cell::load_cell(&common::root().join("config/cell.sim.toml")).unwrap();
+    let mut runner = Runner::for_task(&task, &cell, 3).unwrap();
+    let path = dir.path().join("misses.mcap");
+    runner.record_to(&path, false).unwrap();
+    runner.run_to_end().unwrap();
+    runner.finish_recording().unwrap();
+    let record = runner.into_record();
+    let touch_only = record.touch_only.as_ref().expect("searched");
+    assert_eq!(touch_only.search_moves, 3);
+    assert_eq!(touch_only.misses.len(), 2);
+    let recording = Recording::read(&path).unwrap();
+    assert_eq!(recording.count(Topic::TactileFit), 2);
+    let refits = Replay::of(&recording).unwrap().refit(Estimator::Centroids);
+    assert_eq!(refits.len(), 2);
+    for refit in refits {
+        assert_eq!(refit.frames, task.tactile.average_frames);
+        assert!(matches!(refit.line, Err(FitError::NoContact { .. })));
+    }
 }

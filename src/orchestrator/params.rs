@@ -159,6 +159,7 @@ mod tests {
         p.set("tactile.estimator", "ridge").unwrap();
         p.set("regrasp.max_regrasps", "4").unwrap();
         p.set("regrasp.correction_gain.n", "1.2").unwrap();
+        p.set("prior.max_search_moves", "9").unwrap();
         let task = p.task();
         assert_eq!(task.tolerance.n_mm, 0.25);
         assert_eq!(
@@ -167,6 +168,7 @@ mod tests {
         );
         assert_eq!(task.regrasp.max_regrasps, 4);
         assert_eq!(task.regrasp.correction_gain.n, 1.2);
+        assert_eq!(task.prior.as_ref().map(|p| p.max_search_moves), Some(9));
     }
 
     #[test]
@@ -199,5 +201,11 @@ mod tests {
             Err(ParamError::Unknown { .. })
         ));
         assert_eq!(p.task().tolerance.n_mm, 1.0);
+        let error = p.set("prior.angle_sigma_rad", "2").unwrap_err();
+        assert!(error.to_string().contains("[0, π/2]"), "{error}");
+        assert!(matches!(
+            p.set("prior.max_search_moves", "0"),
+            Err(ParamError::Invalid { .. })
+        ));
     }
 }
