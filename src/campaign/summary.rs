@@ -26,6 +26,10 @@ pub struct PolicySummary {
     pub success: Option<Rate>,
     pub faults: usize,
     pub regrasps_per_trial: Option<Summary>,
+    /// Grasps a search by touch made per trial, over the trials that
+    /// searched; left out of the JSON when none did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_moves_per_trial: Option<Summary>,
     /// Duration of a trial on the cell's clock (simulated time).
     pub cell_time_per_trial_s: Option<Summary>,
     /// Computation per trial (wall clock, not reproducible).
@@ -112,6 +116,10 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
         .iter()
         .map(|e| e.grasps.len().saturating_sub(1) as f64)
         .collect();
+    let search_moves: Vec<f64> = entries
+        .iter()
+        .filter_map(|e| e.search_moves.map(f64::from))
+        .collect();
     let cell_time: Vec<f64> = entries.iter().map(|e| e.cell_time_s).collect();
     let compute_time: Vec<f64> = entries.iter().map(|e| e.compute_time_s).collect();
     PolicySummary {
@@ -125,6 +133,7 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
             .filter(|e| e.outcome == TrialOutcome::Fault)
             .count(),
         regrasps_per_trial: Summary::of(&regrasps),
+        search_moves_per_trial: Summary::of(&search_moves),
         cell_time_per_trial_s: Summary::of(&cell_time),
         compute_time_per_trial_s: Summary::of(&compute_time),
     }
@@ -192,6 +201,15 @@ pub fn render_table(summary: &CampaignSummary) -> String {
     row("regrasps per trial".into(), &|p| {
         cell(p.regrasps_per_trial, 1.0, 2)
     });
+    if summary
+        .policies
+        .iter()
+        .any(|p| p.search_moves_per_trial.is_some())
+    {
+        row("search moves per trial".into(), &|p| {
+            cell(p.search_moves_per_trial, 1.0, 2)
+        });
+    }
     row("cell time per trial s".into(), &|p| {
         cell(p.cell_time_per_trial_s, 1.0, 2)
     });
@@ -253,6 +271,7 @@ mod tests {
             cell_time_s: 4.0 + trial as f64,
             compute_time_s: 0.001,
             recording: None,
+            search_moves: None,
         }
     }
 

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
@@ -15,6 +16,7 @@ use crate::hw::camera::config::{CameraBackend, OcclusionConfig};
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
 use crate::record::RunOutcome;
+use crate::schema::FrameConfig;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
 use crate::task::campaign_file::{ErrorSource, Perturbations, Policy, TrialStart};
@@ -79,6 +81,20 @@ impl Perturbation {
         cell.world.bending_stiffness_n_mm2 = self.cable_stiffness_n_mm2;
         cell
     }
+
+    /// A touch-only trial starts from its prior as the others start from
+    /// the oracle's detection: its mean is the true grasp frame moved by
+    /// this trial's start offset and angle.
+    fn place_prior(&self, task: &mut TaskFile, cell: &CellFile) {
+        if let Some(prior) = &mut task.prior {
+            let cable_from_start = Isometry3::from_parts(
+                Translation3::new(0.0, self.start_offset_mm, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), self.start_angle_rad),
+            );
+            prior.base_from_cable =
+                FrameConfig::from_isometry(&(cell.world.base_from_cable() * cable_from_start));
+        }
+    }
 }
 
 /// A trial as the journal keeps it.
@@ -104,6 +120,10 @@ pub struct TrialEntry {
     /// campaign's recordings folder (so the output folder can move).
     #[serde(default)]
     pub recording: Option<String>,
+    /// Grasps a search by touch made, when the trial searched (`grasps`
+    /// then begins at the first that felt the cable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_moves: Option<u32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -124,9 +144,19 @@ pub struct GraspResult {
     pub estimate_error: Option<PoseError>,
 }
 
-/// The task and cell as `policy` runs them.
-fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile, CellFile) {
-    let (mut task, mut cell) = (task.clone(), cell.clone());
+/// The task and cell of a trial with `perturbation` as `policy` runs them.
+fn apply_policy(
+    policy: &Policy,
+    perturbation: &Perturbation,
+    start: TrialStart,
+    task: &TaskFile,
+    cell: &CellFile,
+) -> (TaskFile, CellFile) {
+    let (mut task, mut cell) = (task.clone(), perturbation.apply(cell, start));
+    if policy.touch_only {
+        task.task.touch_only = true;
+        perturbation.place_prior(&mut task, &cell);
+    }
     task.tactile.estimator = policy.estimator;
     task.regrasp.max_regrasps = policy.max_regrasps;
     if let Some(tolerance) = policy.tolerance {
@@ -184,7 +214,7 @@ pub fn run_trial(
     let started = Instant::now();
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
-    let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell, ranges.start));
+    let (task, cell) = apply_policy(policy, &perturbation, ranges.start, task, cell);
     let mut runner = match Runner::for_task(&task, &cell, seed) {
         Ok(runner) => runner,
         Err(error) => {
@@ -201,6 +231,7 @@ pub fn run_trial(
                 cell_time_s: 0.0,
                 compute_time_s: started.elapsed().as_secs_f64(),
                 recording: None,
+                search_moves: None,
             };
         }
     };
@@ -260,6 +291,7 @@ pub fn run_trial(
         cell_time_s: record.transitions.last().map_or(0.0, |t| t.t_s),
         compute_time_s: started.elapsed().as_secs_f64(),
         recording,
+        search_moves: record.touch_only.as_ref().map(|t| t.search_moves),
     }
 }
 
@@ -284,6 +316,17 @@ mod tests {
             "name = \"p\"\nestimator = \"ridge\"\nmax_regrasps = 1\n{extra}"
         ))
         .expect("a policy")
+    }
+
+    /// A trial 2 mm and 0.1 rad off at the start.
+    fn perturbation() -> Perturbation {
+        Perturbation {
+            start_offset_mm: 2.0,
+            start_angle_rad: 0.1,
+            cable_diameter_mm: 2.5,
+            cable_stiffness_n_mm2: 60.0,
+            sensor_noise_fraction: 0.02,
+        }
     }
 
     #[test]
@@ -329,13 +372,14 @@ mod tests {
     #[test]
     fn a_policy_s_occlusion_reaches_its_trials_cell_at_the_same_place_for_every_policy() {
         let (task, cell) = shipped();
-        let (_, untouched) = apply_policy(&policy(""), &task, &cell);
+        let oracle = TrialStart::Oracle;
+        let (_, untouched) = apply_policy(&policy(""), &perturbation(), oracle, &task, &cell);
         assert!(camera(&untouched).occlusion.is_none());
 
         let seed = trial_seed(1, 3);
         let position = |fraction: f64| {
             let policy = policy(&format!("occlusion_fraction = {fraction}"));
-            let (_, cell) = apply_policy(&policy, &task, &cell);
+            let (_, cell) = apply_policy(&policy, &perturbation(), oracle, &task, &cell);
             let camera = camera(&cell);
             let occlusion = camera.occlusion.as_ref().expect("an occlusion table");
             assert_eq!(occlusion.hidden_fraction, fraction);

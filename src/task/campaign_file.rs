@@ -110,6 +110,10 @@ pub struct Policy {
     /// Simulated cameras only.
     #[serde(default, deserialize_with = "some_fraction")]
     pub occlusion_fraction: Option<f64>,
+    /// Search by touch from the task's `[prior]` without looking, its
+    /// mean at the trial's start offset from the true grasp frame.
+    #[serde(default)]
+    pub touch_only: bool,
 }
 
 /// A source of error of the simulated cell that a policy can switch off.
