@@ -12,7 +12,7 @@ use crate::cell::CellFile;
 use crate::cell::load_cell;
 use crate::schema::ConfigError;
 use crate::schema::toml_file::{key_position, read};
-use crate::task::campaign_file::CampaignFile;
+use crate::task::campaign_file::{CampaignFile, Sensing};
 use crate::task::{TaskFile, load_task};
 
 #[derive(Debug, thiserror::Error)]
@@ -65,7 +65,7 @@ impl Campaign {
     pub fn load(path: &Path, overrides: Overrides) -> Result<Self, CampaignError> {
         let file = CampaignFile::load(path)?;
         let task = load_task(&file.task_path(path))?;
-        if let Some(policy) = file.policies.iter().find(|p| p.touch_only)
+        if let Some(policy) = file.policies.iter().find(|p| p.sensing == Sensing::Touch)
             && task.prior.is_none()
         {
             let (line, column) = key_position(&read(path)?, &["campaign", "task"]);

@@ -19,7 +19,7 @@ use crate::record::RunOutcome;
 use crate::schema::FrameConfig;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
-use crate::task::campaign_file::{ErrorSource, Perturbations, Policy, TrialStart};
+use crate::task::campaign_file::{ErrorSource, Perturbations, Policy, Sensing, TrialStart};
 
 /// The seed of trial `index`: the same for every policy, and independent
 /// of the order and the thread the trials run in.
@@ -153,9 +153,13 @@ fn apply_policy(
     cell: &CellFile,
 ) -> (TaskFile, CellFile) {
     let (mut task, mut cell) = (task.clone(), perturbation.apply(cell, start));
-    if policy.touch_only {
-        task.task.touch_only = true;
-        perturbation.place_prior(&mut task, &cell);
+    match policy.sensing {
+        Sensing::Both => {}
+        Sensing::Vision => task.prior = None,
+        Sensing::Touch => {
+            task.task.touch_only = true;
+            perturbation.place_prior(&mut task, &cell);
+        }
     }
     task.tactile.estimator = policy.estimator;
     task.regrasp.max_regrasps = policy.max_regrasps;
@@ -327,6 +331,26 @@ mod tests {
             cable_stiffness_n_mm2: 60.0,
             sensor_noise_fraction: 0.02,
         }
+    }
+
+    #[test]
+    fn a_policy_s_sensing_keeps_drops_or_forces_the_search_by_touch() {
+        let (task, cell) = shipped();
+        assert!(task.prior.is_some() && !task.task.touch_only);
+        let trial = |sensing: &str| {
+            let policy = policy(&format!("sensing = \"{sensing}\""));
+            apply_policy(&policy, &perturbation(), TrialStart::Oracle, &task, &cell).0
+        };
+        let both = trial("both");
+        assert!(both.prior.is_some() && !both.task.touch_only);
+        assert!(trial("vision").prior.is_none());
+        let touch = trial("touch");
+        assert!(touch.task.touch_only);
+        let moved = touch.prior.expect("a prior").base_from_cable;
+        assert_ne!(
+            moved.translation_mm,
+            task.prior.as_ref().unwrap().base_from_cable.translation_mm
+        );
     }
 
     #[test]

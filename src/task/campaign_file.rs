@@ -110,10 +110,25 @@ pub struct Policy {
     /// Simulated cameras only.
     #[serde(default, deserialize_with = "some_fraction")]
     pub occlusion_fraction: Option<f64>,
-    /// Search by touch from the task's `[prior]` without looking, its
-    /// mean at the trial's start offset from the true grasp frame.
+    /// Which senses find the cable.
     #[serde(default)]
-    pub touch_only: bool,
+    pub sensing: Sensing,
+}
+
+/// Which senses a policy finds the cable with.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sensing {
+    /// The camera, and where it cannot place the cable a search by touch
+    /// from the task's `[prior]`, if it has one.
+    #[default]
+    Both,
+    /// The camera alone: the task's prior is dropped, so a cable the camera
+    /// cannot place fails the trial.
+    Vision,
+    /// Touch alone: a search from the task's `[prior]` without looking, its
+    /// mean at the trial's start offset from the true grasp frame.
+    Touch,
 }
 
 /// A source of error of the simulated cell that a policy can switch off.
