@@ -1,7 +1,73 @@
 //! Range checks run while a file is deserialised, so that a bad value is
 //! reported at its own line and column (`#[serde(deserialize_with = ...)]`).
 
+use std::ops::RangeInclusive;
+
 use serde::{Deserialize, Deserializer, de::Error};
+
+/// A value in `range` (`unit` names its unit in the message, if it has
+/// one). A field with a range of its own uses it through a function beside
+/// the field whose doc comment says why that range.
+pub fn within<'de, D, T>(d: D, range: RangeInclusive<T>, unit: &str) -> Result<T, D::Error>
+where
+    D: Deserializer<'de>,
+    T: Deserialize<'de> + Bound,
+{
+    check_within(T::deserialize(d)?, &range, unit).map_err(D::Error::custom)
+}
+
+/// [`within`] for a value that comes from elsewhere than a file (a command
+/// line option): the value, or the message that refuses it. A NaN is in no
+/// range.
+pub fn check_within<T: Bound>(
+    value: T,
+    range: &RangeInclusive<T>,
+    unit: &str,
+) -> Result<T, String> {
+    if range.contains(&value) {
+        return Ok(value);
+    }
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    Err(format!(
+        "expected a value in [{}, {}]{unit}, found {}",
+        range.start().text(),
+        range.end().text(),
+        value.text()
+    ))
+}
+
+/// A number a range can bound, written short in messages.
+pub trait Bound: PartialOrd + Copy {
+    fn text(self) -> String;
+}
+
+impl Bound for f64 {
+    /// Very large and very small numbers in exponent form (`1e308`, not
+    /// 309 digits).
+    fn text(self) -> String {
+        let magnitude = self.abs();
+        if magnitude != 0.0 && !(1e-4..1e9).contains(&magnitude) {
+            format!("{self:e}")
+        } else {
+            format!("{self}")
+        }
+    }
+}
+
+macro_rules! integer_bound {
+    ($($t:ty),*) => {$(
+        impl Bound for $t {
+            fn text(self) -> String {
+                self.to_string()
+            }
+        }
+    )*};
+}
+integer_bound!(u8, u32, u64, usize, i32);
 
 /// A number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
@@ -60,16 +126,6 @@ pub fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
         Err(D::Error::custom(format!(
             "expected a fraction in [0, 1], found {v}"
         )))
-    }
-}
-
-/// A count ≥ 1.
-pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    let v = usize::deserialize(d)?;
-    if v >= 1 {
-        Ok(v)
-    } else {
-        Err(D::Error::custom("expected a count ≥ 1, found 0"))
     }
 }
 

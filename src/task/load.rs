@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use super::{CampaignFile, TaskFile};
+use crate::cell::CellFile;
 use crate::cell::load::parse_cell;
-use crate::schema::toml_file::{ConfigError, parse, read};
+use crate::schema::toml_file::{ConfigError, invalid_at_key, parse, read};
 
 /// What `check_file` found a file to be.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,10 +38,42 @@ pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
     } else if table.contains_key("cell") {
         parse_cell(path, &text).map(|_| FileKind::Cell)
     } else if table.contains_key("campaign") {
-        parse::<CampaignFile>(path, &text).map(|_| FileKind::Campaign)
+        parse_campaign(path, &text).map(|_| FileKind::Campaign)
     } else {
         Err(ConfigError::UnknownKind {
             path: path.to_owned(),
         })
     }
+}
+
+/// Loads a campaign file with the task and cell files it names. A task or
+/// cell file that cannot be read is reported at the campaign file's line
+/// that names it; one that is invalid, at its own line.
+pub fn load_campaign(path: &Path) -> Result<(CampaignFile, TaskFile, CellFile), ConfigError> {
+    parse_campaign(path, &read(path)?)
+}
+
+fn parse_campaign(
+    path: &Path,
+    text: &str,
+) -> Result<(CampaignFile, TaskFile, CellFile), ConfigError> {
+    let file: CampaignFile = parse(path, text)?;
+    let named_here = |key: &'static str| {
+        move |error: ConfigError| match error {
+            ConfigError::Read { .. } => invalid_at_key(
+                path,
+                text,
+                &["campaign", key],
+                &format!("campaign.{key}"),
+                error.to_string(),
+            ),
+            other => other,
+        }
+    };
+    let task = load_task(&file.task_path(path)).map_err(named_here("task"))?;
+    let cell_path = file.cell_path(path);
+    let cell = read(&cell_path)
+        .and_then(|cell_text| parse_cell(&cell_path, &cell_text))
+        .map_err(named_here("cell"))?;
+    Ok((file, task, cell))
 }

@@ -1,10 +1,10 @@
 //! The task file: what the cell is asked to do.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::Estimator;
-use crate::schema::validate::{at_least_one, finite, line_angle, positive};
+use crate::schema::validate::{finite, line_angle, positive, within};
 
 /// A task file, e.g. `tasks/regrasp.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -93,6 +93,7 @@ pub struct Grasp {
 #[serde(deny_unknown_fields)]
 pub struct Regrasp {
     /// Regrasps allowed after the trial grasp (the paper makes one).
+    #[serde(deserialize_with = "regrasp_count")]
     pub max_regrasps: u32,
     /// How far the open fingers back off along the approach axis before
     /// moving by T_corr, so that they do not drag the cable.
@@ -100,7 +101,10 @@ pub struct Regrasp {
     pub retreat_mm: f64,
     /// How much of T_corr each regrasp applies (default: all of it, as the
     /// paper does); above 1 it makes up for a cable that springs back.
-    #[serde(default = "paper_gain")]
+    #[serde(
+        default = "paper_gain",
+        deserialize_with = "CorrectionGainInFile::deserialize"
+    )]
     pub correction_gain: CorrectionGain,
 }
 
@@ -108,18 +112,55 @@ fn paper_gain() -> CorrectionGain {
     CorrectionGain::PAPER
 }
 
+/// 0 to 100 regrasps: the correction converges in one or two, and each
+/// regrasp's maps and fits stay in the run's record.
+pub(crate) fn regrasp_count<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    within(d, 0..=100, "regrasps")
+}
+
+/// A correction gain as a file writes it, `{ n = …, alpha = … }`.
+#[derive(Deserialize)]
+#[serde(remote = "CorrectionGain", deny_unknown_fields)]
+struct CorrectionGainInFile {
+    #[serde(deserialize_with = "gain")]
+    n: f64,
+    #[serde(deserialize_with = "gain")]
+    alpha: f64,
+}
+
+/// 0 to 2: a regrasp with gain g leaves 1 − g of the error it corrects, so
+/// 0 corrects nothing, 1 is the paper's whole T_corr, and beyond 2 each
+/// regrasp overshoots by more than the error and repeated regrasps diverge.
+fn gain<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 0.0..=2.0, "")
+}
+
+/// An optional correction gain (a campaign's policy), checked as the task
+/// file's.
+pub(crate) fn optional_correction_gain<'de, D: Deserializer<'de>>(
+    d: D,
+) -> Result<Option<CorrectionGain>, D::Error> {
+    CorrectionGainInFile::deserialize(d).map(Some)
+}
+
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TactileEvaluation {
     /// Frames averaged for the bias (the paper: the first 50).
-    #[serde(deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "frame_count")]
     pub bias_samples: usize,
     /// Frames averaged for each evaluation of a grasp.
-    #[serde(deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "frame_count")]
     pub average_frames: usize,
     /// Peak Δv below which the pad is taken to touch nothing.
     #[serde(deserialize_with = "positive")]
     pub contact_threshold_v: f64,
     /// `centroids` (the paper's) or `ridge` (cablecell's).
     pub estimator: Estimator,
+}
+
+/// 1 to 10 000 frames: 20 s at the paper's 500 Hz, far longer than a cable
+/// lies still on the pad.
+fn frame_count<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    within(d, 1..=10_000, "frames")
 }
