@@ -267,3 +267,19 @@ fn abort_makes_the_cell_safe_and_refuses_what_cannot_be_done() {
     prompt(&mut s, State::Fault {});
     quit(s);
 }
+
+#[test]
+fn a_line_that_is_not_utf8_is_answered_and_the_repl_goes_on() {
+    let home = tempfile::tempdir().unwrap();
+    let mut s = repl(home.path(), "0", &["--no-record"]);
+    prompt(&mut s, State::Idle {});
+    // A stray byte of another encoding, typed at the prompt.
+    let mut terminal = s.process().get_file_handle().expect("the terminal");
+    std::io::Write::write_all(&mut terminal, b"show \xff\r").expect("typed");
+    expect(&mut s, "cannot: the line is not valid UTF-8; type it again");
+    prompt(&mut s, State::Idle {});
+    send(&mut s, "show params");
+    expect(&mut s, "tolerance.n_mm = 1");
+    prompt(&mut s, State::Idle {});
+    quit(s);
+}
