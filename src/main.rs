@@ -245,9 +245,12 @@ fn pitch_mm(text: &str) -> Result<f64, String> {
     cli::number_within(text, cablecell::hw::tactile::config::PITCH_MM, "mm")
 }
 
-/// 1 mV (the 12-bit ADC's step is 0.8 mV) to 3.3 V, its whole span.
 fn contact_threshold_v(text: &str) -> Result<f64, String> {
-    cli::number_within(text, 0.001..=3.3, "V")
+    cli::number_within(
+        text,
+        cablecell::perception::tactile::CONTACT_THRESHOLD_V,
+        "V",
+    )
 }
 
 fn parse_estimator(text: &str) -> Result<cablecell::perception::tactile::Estimator, String> {

@@ -304,7 +304,7 @@ fn a_polling_rate_the_serial_link_cannot_carry_is_refused_at_its_line() {
     let line = line_of(&path, "rate_hz = 1e-320");
     assert!(
         err.contains(&format!(
-            ":{line}:11: tactile.rate_hz: expected a value in [1, 1960] Hz, found 1e-320"
+            ":{line}:11: tactile.rate_hz: expected a value in [100, 1960] Hz, found 1e-320"
         )),
         "{err}"
     );
@@ -329,17 +329,48 @@ fn counts_a_run_cannot_hold_are_refused_by_check_and_run() {
         (
             "average_frames = 10",
             "average_frames = 99999999",
-            "tactile.average_frames: expected a value in [1, 10000] frames, found 99999999",
+            "tactile.average_frames: expected a value in [1, 1000] frames, found 99999999",
         ),
         (
             "bias_samples = 50",
             "bias_samples = 4294967296",
-            "tactile.bias_samples: expected a value in [1, 10000] frames, found 4294967296",
+            "tactile.bias_samples: expected a value in [1, 1000] frames, found 4294967296",
         ),
         (
             "max_regrasps = 2",
             "max_regrasps = 4294967295",
             "regrasp.max_regrasps: expected a value in [0, 100] regrasps, found 4294967295",
+        ),
+    ] {
+        let (err, path, _dir) = check_error(from, to);
+        let line = line_of(&path, to);
+        assert!(err.contains(&format!(":{line}:")), "{err}");
+        assert!(err.contains(message), "{err}");
+    }
+}
+
+#[test]
+fn task_values_no_cell_carries_out_are_refused_by_check_and_run() {
+    for (from, to, message) in [
+        (
+            "open_mm = 20.0",
+            "open_mm = 1e300",
+            "grasp.open_mm: expected a value in [1, 68] mm, found 1e300",
+        ),
+        (
+            "grip_current_a = 1.0",
+            "grip_current_a = nan",
+            "grasp.grip_current_a: expected a value in [0.1, 10] A, found NaN",
+        ),
+        (
+            "standoff_mm = 60.0",
+            "standoff_mm = 1e300",
+            "approach.standoff_mm: expected a value in [1, 500] mm, found 1e300",
+        ),
+        (
+            "contact_threshold_v = 0.05",
+            "contact_threshold_v = 5.0",
+            "tactile.contact_threshold_v: expected a value in [0.001, 3.3] V, found 5",
         ),
     ] {
         let (err, path, _dir) = check_error(from, to);

@@ -146,11 +146,11 @@ fn numbers_no_gripper_takes_are_refused_before_anything_is_sent() {
     for (args, message) in [
         (
             &["gripper", "move-pos", "nan"][..],
-            "expected a value in [0, 70] mm, found NaN",
+            "expected a value in [0, 68] mm, found NaN",
         ),
         (
-            &["gripper", "move-pos", "71"],
-            "expected a value in [0, 70] mm, found 71",
+            &["gripper", "move-pos", "69"],
+            "expected a value in [0, 68] mm, found 69",
         ),
         (
             &[

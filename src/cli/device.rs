@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::gripper::config::{GRIP_CURRENT_A, OPENING_MM};
 use cablecell::hw::gripper::smp::{Reply, state_bits};
 use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
 use cablecell::hw::tactile::RemodelTactile;
@@ -57,9 +58,8 @@ pub enum TactileAction {
     },
 }
 
-/// 0 to 70 mm: the PG70's stroke (35 mm a jaw).
 fn opening_mm(text: &str) -> Result<f64, String> {
-    number_within(text, 0.0..=70.0, "mm")
+    number_within(text, OPENING_MM, "mm")
 }
 
 /// 0.1 to 1000 mm/s: the PG70's jaws are far slower than 1 m/s, and a
@@ -74,9 +74,8 @@ fn accel_mm_s2(text: &str) -> Result<f32, String> {
     number_within(text, 1.0..=10_000.0, "mm/s²").map(|v: f64| v as f32)
 }
 
-/// 0.1 to 10 A: the PG70's motor grips with a few amperes.
 fn current_a(text: &str) -> Result<f64, String> {
-    number_within(text, 0.1..=10.0, "A")
+    number_within(text, GRIP_CURRENT_A, "A")
 }
 
 /// 1 to 10 000 samples: 5 s at the link's 2 kHz, 100 s at 100 Hz.

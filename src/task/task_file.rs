@@ -3,7 +3,8 @@
 use serde::{Deserialize, Deserializer};
 
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
-use crate::perception::tactile::Estimator;
+use crate::hw::gripper::config::{GRIP_CURRENT_A, OPENING_MM};
+use crate::perception::tactile::{CONTACT_THRESHOLD_V, Estimator};
 use crate::schema::validate::{finite, line_angle, positive, within};
 
 /// A task file, e.g. `tasks/regrasp.toml`.
@@ -71,7 +72,7 @@ impl Tolerance {
 pub struct Approach {
     /// Distance back from the grasp pose, along the approach axis, at which
     /// the arm stops before descending onto the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "travel_mm")]
     pub standoff_mm: f64,
     /// Cartesian speed of every arm motion of the task.
     #[serde(deserialize_with = "positive")]
@@ -82,10 +83,10 @@ pub struct Approach {
 #[serde(deny_unknown_fields)]
 pub struct Grasp {
     /// Jaw opening before closing on the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "open_mm")]
     pub open_mm: f64,
     /// Motor current of the gripper's grip command (PG70 MOVE_GRIP).
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "grip_current_a")]
     pub grip_current_a: f64,
 }
 
@@ -97,7 +98,7 @@ pub struct Regrasp {
     pub max_regrasps: u32,
     /// How far the open fingers back off along the approach axis before
     /// moving by T_corr, so that they do not drag the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "travel_mm")]
     pub retreat_mm: f64,
     /// How much of T_corr each regrasp applies (default: all of it, as the
     /// paper does); above 1 it makes up for a cable that springs back.
@@ -153,14 +154,33 @@ pub struct TactileEvaluation {
     #[serde(deserialize_with = "frame_count")]
     pub average_frames: usize,
     /// Peak Δv below which the pad is taken to touch nothing.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "contact_threshold_v")]
     pub contact_threshold_v: f64,
     /// `centroids` (the paper's) or `ridge` (cablecell's).
     pub estimator: Estimator,
 }
 
-/// 1 to 10 000 frames: 20 s at the paper's 500 Hz, far longer than a cable
-/// lies still on the pad.
+/// 1 to 1000 frames: 2 s at the paper's 500 Hz (it averages 10 and 50),
+/// 10 s at the slowest polling rate a cell file allows.
 fn frame_count<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    within(d, 1..=10_000, "frames")
+    within(d, 1..=1000, "frames")
+}
+
+/// 1 to 500 mm of travel back from the cable: beyond half a metre the hand
+/// leaves any cell's workspace.
+fn travel_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 1.0..=500.0, "mm")
+}
+
+/// At least 1 mm (the thinnest cable) and within the PG70's stroke.
+fn open_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 1.0..=*OPENING_MM.end(), "mm")
+}
+
+fn grip_current_a<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, GRIP_CURRENT_A, "A")
+}
+
+fn contact_threshold_v<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, CONTACT_THRESHOLD_V, "V")
 }
