@@ -304,6 +304,14 @@ fn a_bad_campaign_file_says_what_and_where() {
         err.contains("perturbation.start_angle_max_rad: expected a value in [0, 1.5707963267948966] rad, found 1e308"),
         "{err}"
     );
+    let (err, _, _dir) = refused(
+        "cable_diameter_mm = [2.5, 2.5]",
+        "cable_diameter_mm = [0.0, 2.5]",
+    );
+    assert!(
+        err.contains("perturbation.cable_diameter_mm: expected [low, high] with 0.1 ≤ low ≤ high ≤ 20 mm, found [0, 2.5]"),
+        "{err}"
+    );
     let (err, _, _dir) = refused("trials = 20", "trials = 4294967296");
     assert!(
         err.contains("campaign.trials: expected a value in [1, 10000] trials, found 4294967296"),

@@ -27,17 +27,22 @@ pub fn check_within<T: Bound>(
     if range.contains(&value) {
         return Ok(value);
     }
-    let unit = if unit.is_empty() {
+    Err(format!(
+        "expected a value in [{}, {}]{}, found {}",
+        range.start().text(),
+        range.end().text(),
+        spaced(unit),
+        value.text()
+    ))
+}
+
+/// ` unit`, or nothing for a number without one.
+fn spaced(unit: &str) -> String {
+    if unit.is_empty() {
         String::new()
     } else {
         format!(" {unit}")
-    };
-    Err(format!(
-        "expected a value in [{}, {}]{unit}, found {}",
-        range.start().text(),
-        range.end().text(),
-        value.text()
-    ))
+    }
 }
 
 /// A number a range can bound, written short in messages.
@@ -153,24 +158,26 @@ pub fn unit_vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Erro
 
 /// A range of voltages `[low, high]` within the 3.3 V ADC.
 pub fn voltage_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-    let [low, high] = <[f64; 2]>::deserialize(d)?;
-    if (0.0..=3.3).contains(&low) && (low..=3.3).contains(&high) {
-        Ok([low, high])
-    } else {
-        Err(D::Error::custom(format!(
-            "expected [low, high] with 0 ≤ low ≤ high ≤ 3.3 V, found [{low}, {high}]"
-        )))
-    }
+    range_within(d, 0.0..=3.3, "V")
 }
 
-/// A range `[low, high]` of numbers with 0 ≤ low ≤ high.
-pub fn non_negative_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+/// A range `[low, high]` of numbers, low ≤ high, both in `bounds`.
+pub fn range_within<'de, D: Deserializer<'de>>(
+    d: D,
+    bounds: RangeInclusive<f64>,
+    unit: &str,
+) -> Result<[f64; 2], D::Error> {
     let [low, high] = <[f64; 2]>::deserialize(d)?;
-    if low >= 0.0 && low <= high && high.is_finite() {
+    if bounds.contains(&low) && bounds.contains(&high) && low <= high {
         Ok([low, high])
     } else {
         Err(D::Error::custom(format!(
-            "expected [low, high] with 0 ≤ low ≤ high, found [{low}, {high}]"
+            "expected [low, high] with {} ≤ low ≤ high ≤ {}{}, found [{}, {}]",
+            bounds.start().text(),
+            bounds.end().text(),
+            spaced(unit),
+            low.text(),
+            high.text()
         )))
     }
 }

@@ -8,7 +8,7 @@ use serde::{Deserialize, Deserializer, de::Error};
 use super::task_file::{Tolerance, optional_correction_gain, regrasp_count};
 use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
-use crate::schema::validate::{non_negative_range, within};
+use crate::schema::validate::{range_within, within};
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -66,13 +66,13 @@ pub struct Perturbations {
     #[serde(deserialize_with = "start_angle_max_rad")]
     pub start_angle_max_rad: f64,
     /// Range of the cable's diameter, drawn uniformly.
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "cable_diameter_mm")]
     pub cable_diameter_mm: [f64; 2],
     /// Range of the cable's bending stiffness EI, drawn uniformly.
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "cable_stiffness_n_mm2")]
     pub cable_stiffness_n_mm2: [f64; 2],
     /// Range of the tactile noise (fraction of the taxels' swing).
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "sensor_noise_fraction")]
     pub sensor_noise_fraction: [f64; 2],
 }
 
@@ -85,6 +85,22 @@ fn start_offset_max_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error>
 /// 0 to π/2: a cable's direction on the pad is an angle in (−π/2, π/2].
 fn start_angle_max_rad<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     within(d, 0.0..=std::f64::consts::FRAC_PI_2, "rad")
+}
+
+/// 0.1 to 20 mm: from a thread to a cable wider than the pad holds.
+fn cable_diameter_mm<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 0.1..=20.0, "mm")
+}
+
+/// 1e-6 to 1e9 N·mm²: from a thread to a steel bar (a 2.5 mm PVC wire is
+/// 60), and never 0, which no simulated cable has.
+fn cable_stiffness_n_mm2<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 1e-6..=1e9, "N·mm²")
+}
+
+/// A fraction of the taxels' swing, as the simulated pad's own noise.
+fn sensor_noise_fraction<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 0.0..=1.0, "")
 }
 
 /// An estimator and a regrasp budget.
