@@ -222,6 +222,23 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
     );
 }
 
+#[test]
+fn a_mask_folder_that_cannot_be_made_is_output_not_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let image = write_scene(
+        dir.path(),
+        "one",
+        vec![cable([50.0, 240.0], [590.0, 240.0])],
+        false,
+    );
+    // A folder inside a file: not even root can make it.
+    let masks = image.join("masks");
+    let out = cablecell(&["detect", text(&image), "--masks", text(&masks)]);
+    assert_eq!(out.status.code(), Some(4));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("masks: cannot create the folder"), "{err}");
+}
+
 /// What `cablecell ARGS` wrote to stderr, having refused its input (exit 2).
 fn refused(args: &[&str]) -> String {
     let out = cablecell(args);
