@@ -139,9 +139,9 @@ pub fn t_corr(measured: &LineInSensor, target: &LineInSensor) -> Isometry3<f64> 
 
 /// How much of T_corr a regrasp applies: the paper applies all of it. A
 /// cable that springs back towards where it was caught undoes part of each
-/// correction, and a gain above 1 makes up for it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// correction, and a gain above 1 makes up for it. Files write it as
+/// `task::task_file` reads it, with its range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CorrectionGain {
     /// Scales the correction's translation.
     pub n: f64,

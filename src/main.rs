@@ -13,8 +13,8 @@ use clap::{Parser, Subcommand};
 /// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
 /// the allowed regrasps, no cable on the pad); 2 bad input (command line,
 /// task, cell, campaign or map file); 3 device fault (the cell was made
-/// safe, or a bring-up command's device failed); 4 the output (a campaign's
-/// journal) could not be written or read.
+/// safe, or a bring-up command's device failed); 4 the output (a journal, a
+/// file, a folder) could not be written or read back.
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Args {
@@ -54,7 +54,7 @@ enum Command {
         seed: Option<u64>,
         /// Cell seconds per wall-clock second while a task runs (a simulated
         /// cell runs at a real one's speed with 1); 0: as fast as it goes.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = pace)]
         pace: f64,
         #[command(flatten)]
         record: cli::run::RecordArgs,
@@ -84,7 +84,7 @@ enum Command {
         /// The campaign file, e.g. tasks/paper-regrasp-campaign.toml.
         file: PathBuf,
         /// Trials per policy (default: the file's).
-        #[arg(long)]
+        #[arg(long, value_parser = trials)]
         trials: Option<usize>,
         /// The campaign's seed (default: the file's).
         #[arg(long)]
@@ -99,7 +99,7 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Worker threads (default: one per core). Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, value_parser = threads)]
         threads: Option<usize>,
         /// Write no recordings (by default each trial is recorded to
         /// OUT/recordings/trial-NNNNNN-POLICY.mcap).
@@ -185,10 +185,10 @@ enum Command {
         /// The map file; standard input if absent or `-`.
         file: Option<PathBuf>,
         /// Taxel pitch.
-        #[arg(long, default_value_t = 3.55)]
+        #[arg(long, default_value_t = 3.55, value_parser = pitch_mm)]
         pitch_mm: f64,
         /// Peak Δv below which the pad touches nothing.
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, default_value_t = 0.05, value_parser = contact_threshold_v)]
         contact_threshold_v: f64,
     },
 }
@@ -225,6 +225,32 @@ enum DeviceCommand {
         #[command(subcommand)]
         action: cli::device::ArmAction,
     },
+}
+
+/// 0 (as fast as it goes) to 1000 cell seconds a second.
+fn pace(text: &str) -> Result<f64, String> {
+    cli::number_within(text, 0.0..=1000.0, "")
+}
+
+fn trials(text: &str) -> Result<usize, String> {
+    cli::number_within(text, cablecell::task::campaign_file::TRIALS, "trials")
+}
+
+/// 1 to 1024 threads: more than any machine's cores, each a cell's memory.
+fn threads(text: &str) -> Result<usize, String> {
+    cli::number_within(text, 1..=1024, "threads")
+}
+
+fn pitch_mm(text: &str) -> Result<f64, String> {
+    cli::number_within(text, cablecell::hw::tactile::config::PITCH_MM, "mm")
+}
+
+fn contact_threshold_v(text: &str) -> Result<f64, String> {
+    cli::number_within(
+        text,
+        cablecell::perception::tactile::CONTACT_THRESHOLD_V,
+        "V",
+    )
 }
 
 fn parse_estimator(text: &str) -> Result<cablecell::perception::tactile::Estimator, String> {

@@ -36,7 +36,16 @@ fn check_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
 /// `to`, and returns its error output, the file, and the folder that keeps
 /// the file alive.
 fn check_cell_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
-    let text = std::fs::read_to_string(root().join("config/cell.sim.toml")).expect("cell file");
+    check_shipped_cell_error("config/cell.sim.toml", from, to)
+}
+
+/// [`check_cell_error`] on the shipped cell file `shipped`.
+fn check_shipped_cell_error(
+    shipped: &str,
+    from: &str,
+    to: &str,
+) -> (String, PathBuf, tempfile::TempDir) {
+    let text = std::fs::read_to_string(root().join(shipped)).expect("cell file");
     assert!(text.contains(from), "the shipped cell holds {from:?}");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("cell.toml");
@@ -44,6 +53,22 @@ fn check_cell_error(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir
     let out = cablecell(&["check", path.to_str().expect("utf-8 path")]);
     assert_eq!(out.status.code(), Some(BAD_INPUT));
     (String::from_utf8(out.stderr).expect("utf-8"), path, dir)
+}
+
+/// Asserts that `run` refuses the cell file `cell` as `check` did, with
+/// the same `error`, before the cell moves.
+fn assert_run_refuses_cell(cell: &Path, error: &str) {
+    let run = cablecell(&[
+        "run",
+        "tasks/regrasp.toml",
+        "--cell",
+        cell.to_str().expect("utf-8 path"),
+        "--seed",
+        "1",
+    ]);
+    assert_eq!(run.status.code(), Some(BAD_INPUT));
+    assert_eq!(String::from_utf8_lossy(&run.stderr), error);
+    assert!(run.stdout.is_empty());
 }
 
 /// The line (1-based) of `needle` in the edited file.
@@ -245,4 +270,266 @@ fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
         "{}",
         String::from_utf8_lossy(&run.stdout)
     );
+}
+
+#[test]
+fn a_pitch_no_pad_has_is_refused_by_check_and_run_at_its_line() {
+    for (pitch, shown) in [
+        ("9223372036854775807", "9.223372036854776e18"),
+        ("1e9", "1e9"),
+        ("0.0", "0"),
+        ("nan", "NaN"),
+    ] {
+        let to = format!("pitch_mm = {pitch}");
+        let (err, path, _dir) = check_cell_error("pitch_mm = 3.55", &to);
+        let line = line_of(&path, &to);
+        assert!(
+            err.contains(&format!(
+                "{}:{line}:12: tactile.pitch_mm: expected a value in [1, 20] mm, found {shown}",
+                path.display()
+            )),
+            "{err}"
+        );
+        assert_run_refuses_cell(&path, &err);
+    }
+}
+
+#[test]
+fn a_polling_rate_the_serial_link_cannot_carry_is_refused_at_its_line() {
+    let (err, path, _dir) = check_shipped_cell_error(
+        "config/cell.emulated.toml",
+        "rate_hz = 500.0",
+        "rate_hz = 1e-320",
+    );
+    let line = line_of(&path, "rate_hz = 1e-320");
+    assert!(
+        err.contains(&format!(
+            ":{line}:11: tactile.rate_hz: expected a value in [100, 1960] Hz, found 1e-320"
+        )),
+        "{err}"
+    );
+    assert_run_refuses_cell(&path, &err);
+    // A real finger on a 9600 baud link: 19 samples a second at most.
+    let (err, path, _dir) = check_cell_error(
+        "[tactile.backend.sim]\nline_spread_pitch = 0.55\nspan_v = 1.2\nrest_v = [0.9, 1.5]\ngain_spread = 0.1\nnoise_fraction = 0.02\n",
+        "[tactile.backend.remodel]\nport = \"/dev/ttyACM0\"\nbaud = 9600\n",
+    );
+    let line = line_of(&path, "rate_hz = 500.0");
+    assert!(
+        err.contains(&format!(
+            ":{line}:1: tactile.rate_hz: 500 Hz is more than the link at 9600 baud carries: 19 samples/s of 51 bytes"
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn counts_a_run_cannot_hold_are_refused_by_check_and_run() {
+    for (from, to, message) in [
+        (
+            "average_frames = 10",
+            "average_frames = 99999999",
+            "tactile.average_frames: expected a value in [1, 1000] frames, found 99999999",
+        ),
+        (
+            "bias_samples = 50",
+            "bias_samples = 4294967296",
+            "tactile.bias_samples: expected a value in [1, 1000] frames, found 4294967296",
+        ),
+        (
+            "max_regrasps = 2",
+            "max_regrasps = 4294967295",
+            "regrasp.max_regrasps: expected a value in [0, 100] regrasps, found 4294967295",
+        ),
+    ] {
+        let (err, path, _dir) = check_error(from, to);
+        let line = line_of(&path, to);
+        assert!(err.contains(&format!(":{line}:")), "{err}");
+        assert!(err.contains(message), "{err}");
+    }
+}
+
+#[test]
+fn task_values_no_cell_carries_out_are_refused_by_check_and_run() {
+    for (from, to, message) in [
+        (
+            "open_mm = 20.0",
+            "open_mm = 1e300",
+            "grasp.open_mm: expected a value in [1, 68] mm, found 1e300",
+        ),
+        (
+            "grip_current_a = 1.0",
+            "grip_current_a = nan",
+            "grasp.grip_current_a: expected a value in [0.1, 10] A, found NaN",
+        ),
+        (
+            "standoff_mm = 60.0",
+            "standoff_mm = 1e300",
+            "approach.standoff_mm: expected a value in [1, 500] mm, found 1e300",
+        ),
+        (
+            "contact_threshold_v = 0.05",
+            "contact_threshold_v = 5.0",
+            "tactile.contact_threshold_v: expected a value in [0.001, 3.3] V, found 5",
+        ),
+    ] {
+        let (err, path, _dir) = check_error(from, to);
+        let line = line_of(&path, to);
+        assert!(err.contains(&format!(":{line}:")), "{err}");
+        assert!(err.contains(message), "{err}");
+    }
+}
+
+#[test]
+fn a_correction_gain_that_is_no_gain_is_refused_at_its_field() {
+    for (gain, message) in [
+        (
+            "{ n = nan, alpha = 1.0 }",
+            "regrasp.correction_gain.n: expected a value in [0, 2], found NaN",
+        ),
+        (
+            "{ n = 1.0, alpha = -0.5 }",
+            "regrasp.correction_gain.alpha: expected a value in [0, 2], found -0.5",
+        ),
+        (
+            "{ n = 1.0, alpha = 1.0, beta = 1.0 }",
+            "regrasp.correction_gain.beta: unknown field `beta`, expected `n` or `alpha`",
+        ),
+    ] {
+        let to = format!("max_regrasps = 2\ncorrection_gain = {gain}");
+        let (err, path, _dir) = check_error("max_regrasps = 2", &to);
+        let line = line_of(&path, "correction_gain");
+        assert!(err.contains(&format!(":{line}:")), "{err}");
+        assert!(err.contains(message), "{err}");
+    }
+}
+
+#[test]
+fn a_marker_outside_its_dictionary_is_refused_before_calibration() {
+    for id in ["50", "-1"] {
+        let to = format!("id = {id},");
+        let (err, path, _dir) = check_cell_error("id = 3,", &to);
+        let line = line_of(&path, &to);
+        assert!(
+            err.contains(&format!(
+                ":{line}:35: camera.marker.id: expected a marker id in [0, 49] (the dictionary holds 50 markers), found {id}"
+            )),
+            "{err}"
+        );
+        let calibrate = cablecell(&[
+            "calibrate-camera",
+            "--cell",
+            path.to_str().expect("utf-8 path"),
+            "--dry-run",
+        ]);
+        assert_eq!(calibrate.status.code(), Some(BAD_INPUT));
+        assert_eq!(String::from_utf8_lossy(&calibrate.stderr), err);
+    }
+}
+
+/// Asserts that the binary run with `args` refuses them with exit status 2
+/// and an error that holds each of `messages`.
+fn assert_command_line_refused(args: &[&str], messages: &[&str]) {
+    let out = cablecell(args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(BAD_INPUT), "{args:?}: {err}");
+    for message in messages {
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn command_line_numbers_out_of_range_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("set");
+    let out = out.to_str().expect("utf-8 path");
+    for (args, messages) in [
+        (
+            &[
+                "render-dataset",
+                out,
+                "--min-cables",
+                "4294967295",
+                "--max-cables",
+                "4294967295",
+            ][..],
+            &[
+                "--min-cables",
+                "expected a value in [0, 16] cables, found 4294967295",
+            ][..],
+        ),
+        (
+            &["render-dataset", out, "--max-cables", "100000"],
+            &[
+                "--max-cables",
+                "expected a value in [0, 16] cables, found 100000",
+            ],
+        ),
+        (
+            &["render-dataset", out, "--width-px", "100000"],
+            &[
+                "--width-px",
+                "expected a value in [16, 4096] px, found 100000",
+            ],
+        ),
+        (
+            &["render-dataset", out, "--min-diameter-px", "nan"],
+            &["--min-diameter-px", "found NaN"],
+        ),
+        (
+            &[
+                "campaign",
+                "tasks/paper-regrasp-campaign.toml",
+                "--trials",
+                "4294967296",
+            ],
+            &[
+                "--trials",
+                "expected a value in [1, 10000] trials, found 4294967296",
+            ],
+        ),
+        (
+            &[
+                "campaign",
+                "tasks/paper-regrasp-campaign.toml",
+                "--threads",
+                "0",
+            ],
+            &[
+                "--threads",
+                "expected a value in [1, 1024] threads, found 0",
+            ],
+        ),
+        (
+            &["repl", "tasks/regrasp.toml", "--pace", "nan"],
+            &["--pace", "found NaN"],
+        ),
+        (
+            &["tactile-fit", "--pitch-mm", "nan"],
+            &["--pitch-mm", "expected a value in [1, 20] mm, found NaN"],
+        ),
+        (
+            &["tactile-fit", "--contact-threshold-v", "0"],
+            &[
+                "--contact-threshold-v",
+                "expected a value in [0.001, 3.3] V, found 0",
+            ],
+        ),
+    ] {
+        assert_command_line_refused(args, messages);
+    }
+    assert!(!Path::new(out).exists(), "nothing was rendered");
+}
+
+#[test]
+fn a_calibration_speed_the_cell_refuses_is_bad_input() {
+    for speed in ["0", "nan", "1e9"] {
+        assert_command_line_refused(
+            &["calibrate-camera", "--speed-mm-s", speed, "--dry-run"],
+            &[
+                "calibration pose 0: arm: refused",
+                "the cell allows (0, 250] mm/s",
+            ],
+        );
+    }
 }

@@ -24,6 +24,22 @@ fn campaign(args: &[&str]) -> Output {
     command(args).output().expect("cablecell runs")
 }
 
+/// The shipped campaign's arguments for `trials` trials of `seed` into
+/// `out`, unrecorded, then `more`.
+fn unrecorded<'a>(trials: &'a str, seed: &'a str, out: &'a Path, more: &[&'a str]) -> Vec<&'a str> {
+    let args = [
+        CAMPAIGN,
+        "--trials",
+        trials,
+        "--seed",
+        seed,
+        "--out",
+        common::text(out),
+        "--no-record",
+    ];
+    [&args[..], more].concat()
+}
+
 /// The journal's entries, ordered, without the wall-clock time (the one
 /// field that is not reproducible).
 fn entries(out: &Path) -> Vec<TrialEntry> {
@@ -233,6 +249,16 @@ fn edited_campaign(dir: &Path, from: &str, to: &str) -> PathBuf {
     path
 }
 
+/// The line (1-based) of the first line of `path` holding `needle`.
+fn text_line(path: &Path, needle: &str) -> usize {
+    std::fs::read_to_string(path)
+        .expect("read")
+        .lines()
+        .position(|l| l.contains(needle))
+        .expect("needle")
+        + 1
+}
+
 fn refused(from: &str, to: &str) -> (String, PathBuf, tempfile::TempDir) {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = edited_campaign(dir.path(), from, to);
@@ -259,12 +285,50 @@ fn a_bad_campaign_file_says_what_and_where() {
     let (err, _, _dir) = refused("name = \"cablecell\"", "name = \"paper\"");
     assert!(err.contains("policy name `paper` is used twice"), "{err}");
 
-    let (err, _, _dir) = refused("task = \"regrasp.toml\"", "task = \"missing.toml\"");
-    assert!(err.contains("missing.toml: cannot read the file"), "{err}");
+    let (err, path, _dir) = refused("task = \"regrasp.toml\"", "task = \"missing.toml\"");
+    let line = text_line(&path, "missing.toml");
+    assert!(
+        err.contains(&format!(
+            "{}:{line}:1: campaign.task: {}: cannot read the file",
+            path.display(),
+            path.with_file_name("missing.toml").display()
+        )),
+        "{err}"
+    );
+    let check = common::cablecell(&["check", common::text(&path)]);
+    assert_eq!(check.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&check.stderr), err);
+
+    let (err, _, _dir) = refused("start_angle_max_rad = 0.7", "start_angle_max_rad = 1e308");
+    assert!(
+        err.contains("perturbation.start_angle_max_rad: expected a value in [0, 1.5707963267948966] rad, found 1e308"),
+        "{err}"
+    );
+    let (err, _, _dir) = refused(
+        "cable_diameter_mm = [2.5, 2.5]",
+        "cable_diameter_mm = [0.0, 2.5]",
+    );
+    assert!(
+        err.contains("perturbation.cable_diameter_mm: expected [low, high] with 0.1 ≤ low ≤ high ≤ 20 mm, found [0, 2.5]"),
+        "{err}"
+    );
+    let (err, _, _dir) = refused("trials = 20", "trials = 4294967296");
+    assert!(
+        err.contains("campaign.trials: expected a value in [1, 10000] trials, found 4294967296"),
+        "{err}"
+    );
+    let (err, _, _dir) = refused(
+        "correction_gain = { n = 1.2,",
+        "correction_gain = { n = nan,",
+    );
+    assert!(
+        err.contains("policy[1].correction_gain.n: expected a value in [0, 2], found NaN"),
+        "{err}"
+    );
 
     let (err, _, _dir) = refused("start_offset_max_mm = 10.0", "start_offset_max_mm = -5.0");
     assert!(
-        err.contains("perturbation.start_offset_max_mm: expected a number ≥ 0, found -5"),
+        err.contains("perturbation.start_offset_max_mm: expected a value in [0, 50] mm, found -5"),
         "{err}"
     );
 }
@@ -320,4 +384,110 @@ fn a_trial_that_faults_is_recorded_and_the_campaign_goes_on() {
     }
     let table = String::from_utf8_lossy(&status.stdout);
     assert!(table.contains("faults                  3"), "{table}");
+}
+
+#[test]
+fn a_summary_read_back_from_the_journal_equals_the_live_one() {
+    // Seed 1, 4 trials: before serde_json parsed floats exactly, six of the
+    // summary's figures read back differed in their last digit.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("s");
+    let live = campaign(&unrecorded("4", "1", &out, &["--json"]));
+    assert_eq!(live.status.code(), Some(0));
+    // Resuming a finished campaign runs nothing: its summary is read back.
+    let read_back = campaign(&unrecorded("4", "1", &out, &["--json", "--resume"]));
+    assert_eq!(read_back.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8_lossy(&read_back.stdout),
+        String::from_utf8_lossy(&live.stdout)
+    );
+}
+
+/// Resumes a campaign of `trials` trials, seed 3, whose journal is `edit`
+/// of `journal`, and returns the exit status and error output.
+fn resumed_with(journal: &str, edit: impl Fn(&str) -> String, trials: &str) -> (i32, String) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("r");
+    std::fs::create_dir_all(&out).expect("folder");
+    std::fs::write(out.join("trials.jsonl"), edit(journal)).expect("write");
+    let result = campaign(&unrecorded(trials, "3", &out, &["--resume"]));
+    (
+        result.status.code().expect("exit status"),
+        String::from_utf8_lossy(&result.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_resumed_journal_that_is_not_the_campaign_s_is_refused_at_its_line() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("c");
+    assert_eq!(
+        campaign(&unrecorded("2", "3", &out, &[])).status.code(),
+        Some(0)
+    );
+    let journal = std::fs::read_to_string(out.join("trials.jsonl")).expect("journal");
+    let lines: Vec<&str> = journal.lines().collect();
+    assert_eq!(lines.len(), 4);
+
+    // A line written twice: the journal itself is damaged.
+    let (code, err) = resumed_with(&journal, |j| format!("{j}{}\n", lines[1]), "2");
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.contains("trials.jsonl:5: not a valid journal entry: trial")
+            && err.contains("is already recorded on line 2"),
+        "{err}"
+    );
+    // A trial beyond the campaign's, and a policy its file lacks: the
+    // journal is another campaign's.
+    let (code, err) = resumed_with(&journal, str::to_owned, "1");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("is beyond the campaign's 1 trials: resume with --trials 2 or more"),
+        "{err}"
+    );
+    let (code, err) = resumed_with(
+        &journal,
+        |j| j.replacen("\"policy\":\"cablecell\"", "\"policy\":\"magic\"", 1),
+        "2",
+    );
+    assert_eq!(code, 2, "{err}");
+    let line = lines
+        .iter()
+        .position(|l| l.contains("\"policy\":\"cablecell\""))
+        .expect("a cablecell trial")
+        + 1;
+    assert!(
+        err.contains(&format!(
+            "trials.jsonl:{line}: policy `magic` is not one of the campaign file's (paper, cablecell)"
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_journal_that_is_no_regular_file_is_refused_unread() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("c");
+    std::fs::create_dir_all(&out).expect("folder");
+    let journal = out.join("trials.jsonl");
+    std::os::unix::fs::symlink("/dev/zero", &journal).expect("link");
+    for resume in [&["--resume"][..], &[]] {
+        let result = campaign(&unrecorded("1", "1", &out, resume));
+        assert_eq!(result.status.code(), Some(4));
+        assert!(
+            String::from_utf8_lossy(&result.stderr)
+                .contains("trials.jsonl: not a regular file, so not a journal"),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+    }
+    std::fs::remove_file(&journal).expect("unlink");
+    std::fs::create_dir(&journal).expect("a folder in its place");
+    for resume in [&["--resume"][..], &[]] {
+        let result = campaign(&unrecorded("1", "1", &out, resume));
+        assert_eq!(result.status.code(), Some(4));
+        let err = String::from_utf8_lossy(&result.stderr);
+        assert!(err.contains("not a regular file"), "{err}");
+        assert!(!err.contains("already holds trials"), "{err}");
+    }
 }

@@ -138,3 +138,46 @@ fn a_missing_port_is_named() {
         String::from_utf8_lossy(&out.stderr).contains("/dev/no-such-port: cannot open the port")
     );
 }
+
+#[test]
+fn numbers_no_gripper_takes_are_refused_before_anything_is_sent() {
+    let emulator = Emulator::start("pg70");
+    let before = stdout(&emulator.device(&["gripper", "state"]));
+    for (args, message) in [
+        (
+            &["gripper", "move-pos", "nan"][..],
+            "expected a value in [0, 68] mm, found NaN",
+        ),
+        (
+            &["gripper", "move-pos", "69"],
+            "expected a value in [0, 68] mm, found 69",
+        ),
+        (
+            &[
+                "gripper", "move-pos", "30", "--speed", "nan", "--accel", "200",
+            ],
+            "expected a value in [0.1, 1000] mm/s, found NaN",
+        ),
+        (
+            &[
+                "gripper", "move-pos", "30", "--speed", "40", "--accel", "inf",
+            ],
+            "expected a value in [1, 10000] mm/s², found inf",
+        ),
+        (
+            &["gripper", "grip", "nan"],
+            "expected a value in [0.1, 10] A, found NaN",
+        ),
+        (
+            &["tactile", "read", "--samples", "4294967296"],
+            "expected a value in [1, 10000] samples, found 4294967296",
+        ),
+    ] {
+        let refused = emulator.device(args);
+        let err = String::from_utf8_lossy(&refused.stderr);
+        assert_eq!(refused.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+    // The module heard nothing: still unreferenced, where it was.
+    assert_eq!(stdout(&emulator.device(&["gripper", "state"])), before);
+}

@@ -304,3 +304,19 @@ fn break_in_a_search_by_touch_and_step_through_it() {
     prompt(&mut s, State::Done {});
     quit(s);
 }
+
+#[test]
+fn a_line_that_is_not_utf8_is_answered_and_the_repl_goes_on() {
+    let home = tempfile::tempdir().unwrap();
+    let mut s = repl(home.path(), "0", &["--no-record"]);
+    prompt(&mut s, State::Idle {});
+    // A stray byte of another encoding, typed at the prompt.
+    let mut terminal = s.process().get_file_handle().expect("the terminal");
+    std::io::Write::write_all(&mut terminal, b"show \xff\r").expect("typed");
+    expect(&mut s, "cannot: the line is not valid UTF-8; type it again");
+    prompt(&mut s, State::Idle {});
+    send(&mut s, "show params");
+    expect(&mut s, "tolerance.n_mm = 1");
+    prompt(&mut s, State::Idle {});
+    quit(s);
+}

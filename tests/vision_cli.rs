@@ -208,6 +208,35 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
         stderr.contains("cut.jpg: the JPEG data stops before its end-of-image marker"),
         "{stderr}"
     );
+    // Whole, but with bytes of its scan overwritten: libjpeg would decode
+    // it garbled, warning without the file's name.
+    let mut garbled = bytes.clone();
+    let middle = bytes.len() / 2;
+    garbled[middle..middle + 40].fill(0x35);
+    let corrupt = dir.path().join("corrupt.jpg");
+    std::fs::write(&corrupt, &garbled).expect("write");
+    let stderr = refused(&["detect", text(&corrupt)]);
+    assert!(
+        stderr.contains("corrupt.jpg: the JPEG data is corrupt ("),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_mask_folder_that_cannot_be_made_is_output_not_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let image = write_scene(
+        dir.path(),
+        "one",
+        vec![cable([50.0, 240.0], [590.0, 240.0])],
+        false,
+    );
+    // A folder inside a file: not even root can make it.
+    let masks = image.join("masks");
+    let out = cablecell(&["detect", text(&image), "--masks", text(&masks)]);
+    assert_eq!(out.status.code(), Some(4));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("masks: cannot create the folder"), "{err}");
 }
 
 /// What `cablecell ARGS` wrote to stderr, having refused its input (exit 2).
@@ -219,7 +248,7 @@ fn refused(args: &[&str]) -> String {
 }
 
 #[test]
-fn a_missing_network_is_a_clear_error() {
+fn a_missing_network_or_a_file_that_is_none_is_bad_input() {
     let dir = tempfile::tempdir().expect("tempdir");
     let image = write_scene(
         dir.path(),
@@ -235,9 +264,22 @@ fn a_missing_network_is_a_clear_error() {
         "--model",
         "/no/such/model.onnx",
     ]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/no/such/model.onnx"), "{err}");
+    // A file that is no network is the command line's fault too.
+    let stderr = refused(&[
+        "detect",
+        text(&image),
+        "--mask",
+        "network",
+        "--model",
+        "README.md",
+    ]);
+    assert!(
+        stderr.contains("segmentation network inference failed: model README.md"),
+        "{stderr}"
+    );
 }
 
 /// The network and its runtime are found where the set-up put them from

@@ -49,6 +49,19 @@ pub enum JournalError {
         path.display()
     )]
     AlreadyExists { path: PathBuf, len_bytes: u64 },
+    /// The path names something other than a regular file (a folder, a
+    /// device, a link to one): a journal is a file of JSON lines. Remove it
+    /// or choose another output folder.
+    #[error("{}: not a regular file, so not a journal: remove it, or choose another output folder", path.display())]
+    NotAFile { path: PathBuf },
+    /// The file is larger than any campaign's journal: the campaign file
+    /// allows 10 000 trials per policy, of a few kB each. It is not read.
+    #[error(
+        "{}: {len_bytes} bytes, more than a journal holds ({max} bytes at most): not a campaign's journal",
+        path.display(),
+        max = MAX_JOURNAL_BYTES
+    )]
+    TooLarge { path: PathBuf, len_bytes: u64 },
     /// Another open journal (in this or another process) holds the file's
     /// lock: two campaigns writing one journal would interleave their
     /// trials. Stop the other campaign or choose another output folder.
@@ -69,11 +82,17 @@ pub enum JournalError {
     Poisoned { path: PathBuf },
 }
 
+/// The most bytes a journal may hold: far more than the largest campaign
+/// writes, and a bound on what a resume reads.
+pub const MAX_JOURNAL_BYTES: u64 = 1 << 30;
+
 /// What was read back from a journal.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recovered<T> {
     /// Every entry of a complete line, in file order.
     pub entries: Vec<T>,
+    /// The 1-based line of each entry.
+    pub lines: Vec<usize>,
     /// Bytes of a final line cut short by a kill, dropped. 0 if none.
     pub truncated_tail_bytes: usize,
     /// 1-based line number of that dropped tail, `None` if there is none.
@@ -124,8 +143,7 @@ impl Journal {
         path: &Path,
     ) -> Result<(Journal, Recovered<T>), JournalError> {
         let mut file = open_locked(path)?;
-        let mut bytes = Vec::new();
-        file.read_to_end(&mut bytes).map_err(io_error(path))?;
+        let bytes = read_bounded(&mut file, path)?;
         let (recovered, complete_len) = parse(&bytes, path)?;
         if recovered.truncated_tail_bytes > 0 {
             file.set_len(complete_len as u64)
@@ -191,7 +209,9 @@ impl Journal {
 /// may hold the file meanwhile: its line being written shows as a
 /// truncated tail.
 pub fn read<T: DeserializeOwned>(path: &Path) -> Result<Recovered<T>, JournalError> {
-    let bytes = std::fs::read(path).map_err(io_error(path))?;
+    refuse_non_file(path)?;
+    let mut file = File::open(path).map_err(io_error(path))?;
+    let bytes = read_bounded(&mut file, path)?;
     let (recovered, _complete_len) = parse(&bytes, path)?;
     Ok(recovered)
 }
@@ -210,6 +230,7 @@ fn parse<T: DeserializeOwned>(
         .map_or(0, |last_newline| last_newline + 1);
     let (complete, tail) = bytes.split_at(complete_len);
     let mut entries = Vec::new();
+    let mut lines = Vec::new();
     let mut complete_lines = 0;
     for line in complete.split_inclusive(|&b| b == b'\n') {
         complete_lines += 1;
@@ -222,18 +243,50 @@ fn parse<T: DeserializeOwned>(
             message: e.to_string(),
         })?;
         entries.push(entry);
+        lines.push(complete_lines);
     }
     let recovered = Recovered {
         entries,
+        lines,
         truncated_tail_bytes: tail.len(),
         truncated_tail_line: (!tail.is_empty()).then_some(complete_lines + 1),
     };
     Ok((recovered, complete_len))
 }
 
+/// The whole file, unless it holds more than [`MAX_JOURNAL_BYTES`] (read
+/// through a bound, so that no file, whatever its metadata says, is read
+/// without end).
+fn read_bounded(file: &mut File, path: &Path) -> Result<Vec<u8>, JournalError> {
+    let mut bytes = Vec::new();
+    file.take(MAX_JOURNAL_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io_error(path))?;
+    if bytes.len() as u64 > MAX_JOURNAL_BYTES {
+        let len_bytes = file.metadata().map_or(bytes.len() as u64, |m| m.len());
+        return Err(JournalError::TooLarge {
+            path: path.to_path_buf(),
+            len_bytes,
+        });
+    }
+    Ok(bytes)
+}
+
+/// Refuses a path that is there but no regular file (after links): a
+/// folder, or a device such as `/dev/zero` that would be read without end.
+fn refuse_non_file(path: &Path) -> Result<(), JournalError> {
+    match std::fs::metadata(path) {
+        Ok(meta) if !meta.is_file() => Err(JournalError::NotAFile {
+            path: path.to_path_buf(),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Opens (creating if missing, with its folders) `path` for reading and
-/// appending, and takes its exclusive lock.
+/// appending, and takes its exclusive lock. Only a regular file is opened.
 fn open_locked(path: &Path) -> Result<File, JournalError> {
+    refuse_non_file(path)?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(io_error(path))?;
     }

@@ -2,18 +2,17 @@
 //! many threads as asked, each finished trial appended to the journal as
 //! soon as it is done.
 
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 
-use super::journal::{Journal, JournalError};
+use super::journal::{Journal, JournalError, Recovered};
 use super::trial::{TrialEntry, run_trial};
 use crate::cell::CellFile;
-use crate::cell::load_cell;
 use crate::schema::ConfigError;
-use crate::schema::toml_file::{key_position, read};
-use crate::task::campaign_file::{CampaignFile, Sensing};
-use crate::task::{TaskFile, load_task};
+use crate::task::campaign_file::CampaignFile;
+use crate::task::{TaskFile, load_campaign};
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -30,11 +29,23 @@ pub enum CampaignError {
     Exists { path: PathBuf },
     /// `--resume` of a journal written with another seed would mix trials
     /// of two campaigns.
-    #[error("{}: its trials were run with seed {found}, not {expected}: resume with --seed {found}, or use another --out", path.display())]
+    #[error("{}:{line}: its trials were run with seed {found}, not {expected}: resume with --seed {found}, or use another --out", path.display())]
     SeedMismatch {
         path: PathBuf,
+        /// 1-based line of the first trial of another seed.
+        line: usize,
         found: u64,
         expected: u64,
+    },
+    /// `--resume` found a trial this campaign does not run: one beyond its
+    /// trials, or of a policy its file lacks. Resume with the campaign file
+    /// and `--trials` that wrote the journal, or use another output folder.
+    #[error("{}:{line}: {reason}; or use another --out", path.display())]
+    Foreign {
+        path: PathBuf,
+        /// 1-based line of the trial.
+        line: usize,
+        reason: String,
     },
 }
 
@@ -63,25 +74,7 @@ pub struct Campaign {
 
 impl Campaign {
     pub fn load(path: &Path, overrides: Overrides) -> Result<Self, CampaignError> {
-        let file = CampaignFile::load(path)?;
-        let task = load_task(&file.task_path(path))?;
-        if let Some(policy) = file.policies.iter().find(|p| p.sensing == Sensing::Touch)
-            && task.prior.is_none()
-        {
-            let (line, column) = key_position(&read(path)?, &["campaign", "task"]);
-            return Err(ConfigError::Invalid {
-                path: path.to_owned(),
-                line,
-                column,
-                field: "campaign.task".to_owned(),
-                message: format!(
-                    "policy `{}` is touch only, but the task has no [prior] to search from",
-                    policy.name
-                ),
-            }
-            .into());
-        }
-        let cell = load_cell(&file.cell_path(path))?;
+        let (file, task, cell) = load_campaign(path)?;
         Ok(Self {
             trials: overrides.trials.unwrap_or(file.campaign.trials),
             seed: overrides.seed.unwrap_or(file.campaign.seed),
@@ -106,6 +99,60 @@ impl Campaign {
         self.file.policies.iter().map(|p| p.name.clone()).collect()
     }
 
+    /// Refuses a resumed journal whose entries are not this campaign's
+    /// trials, naming the first offending line: another seed, a trial
+    /// beyond `trials`, a policy the campaign file lacks, or a trial
+    /// recorded twice (which no campaign writes).
+    fn check_resumed(
+        &self,
+        path: &Path,
+        recovered: &Recovered<TrialEntry>,
+    ) -> Result<(), CampaignError> {
+        let mut seen = HashMap::new();
+        for (entry, &line) in recovered.entries.iter().zip(&recovered.lines) {
+            let foreign = |reason: String| CampaignError::Foreign {
+                path: path.to_owned(),
+                line,
+                reason,
+            };
+            if entry.campaign_seed != self.seed {
+                return Err(CampaignError::SeedMismatch {
+                    path: path.to_owned(),
+                    line,
+                    found: entry.campaign_seed,
+                    expected: self.seed,
+                });
+            }
+            if entry.trial >= self.trials {
+                return Err(foreign(format!(
+                    "trial {} is beyond the campaign's {} trials: resume with --trials {} or more",
+                    entry.trial,
+                    self.trials,
+                    entry.trial + 1
+                )));
+            }
+            if !self.file.policies.iter().any(|p| p.name == entry.policy) {
+                return Err(foreign(format!(
+                    "policy `{}` is not one of the campaign file's ({})",
+                    entry.policy,
+                    self.policy_names().join(", ")
+                )));
+            }
+            if let Some(first) = seen.insert((entry.trial, entry.policy.as_str()), line) {
+                return Err(JournalError::Corrupt {
+                    path: path.to_owned(),
+                    line,
+                    message: format!(
+                        "trial {} of policy `{}` is already recorded on line {first}",
+                        entry.trial, entry.policy
+                    ),
+                }
+                .into());
+            }
+        }
+        Ok(())
+    }
+
     /// Runs every trial the journal lacks (all of them unless `resume`),
     /// calling `on_entry` as each one is recorded. Returns the campaign's
     /// entries, old and new, ordered by policy and trial.
@@ -118,40 +165,31 @@ impl Campaign {
         let path = self.journal_path();
         let (mut journal, mut entries) = if resume {
             let (journal, recovered) = Journal::resume::<TrialEntry>(&path)?;
-            if let Some(other) = recovered
-                .entries
-                .iter()
-                .find(|e| e.campaign_seed != self.seed)
-            {
-                return Err(CampaignError::SeedMismatch {
-                    path,
-                    found: other.campaign_seed,
-                    expected: self.seed,
-                });
-            }
             if recovered.truncated_tail_bytes > 0 {
                 tracing::warn!(
                     bytes = recovered.truncated_tail_bytes,
                     "dropped a trial cut short when the campaign was stopped; it runs again"
                 );
             }
+            self.check_resumed(&path, &recovered)?;
             (journal, recovered.entries)
         } else {
-            if std::fs::metadata(&path).is_ok_and(|m| m.len() > 0) {
+            if std::fs::metadata(&path).is_ok_and(|m| m.is_file() && m.len() > 0) {
                 return Err(CampaignError::Exists { path });
             }
             (Journal::create(&path)?, Vec::new())
         };
         let policies = &self.file.policies;
-        entries.retain(|e| e.trial < self.trials && policies.iter().any(|p| p.name == e.policy));
-        let jobs: Vec<(usize, usize)> = (0..self.trials)
-            .flat_map(|trial| (0..policies.len()).map(move |policy| (trial, policy)))
-            .filter(|&(trial, policy)| {
-                !entries
-                    .iter()
-                    .any(|e| e.trial == trial && e.policy == policies[policy].name)
-            })
-            .collect();
+        let jobs: Vec<(usize, usize)> = {
+            let done: HashSet<(usize, &str)> = entries
+                .iter()
+                .map(|e| (e.trial, e.policy.as_str()))
+                .collect();
+            (0..self.trials)
+                .flat_map(|trial| (0..policies.len()).map(move |policy| (trial, policy)))
+                .filter(|&(trial, policy)| !done.contains(&(trial, policies[policy].name.as_str())))
+                .collect()
+        };
         entries.iter().for_each(&mut on_entry);
 
         let recordings = self.record.then(|| self.recordings_folder());

@@ -5,8 +5,9 @@ use std::path::Path;
 
 use super::CellFile;
 use crate::detector::config::DetectorBackend;
+use crate::hw::tactile::config::{SAMPLE_EXCHANGE_BYTES, TactileBackend, link_rate_hz};
 use crate::perception::vision::MaskMethod;
-use crate::schema::toml_file::{ConfigError, key_position, parse, read};
+use crate::schema::toml_file::{ConfigError, invalid_at_key, parse, read};
 
 /// Loads a cell file: its schema, the checks that span several tables,
 /// and its paths made relative to the file's folder.
@@ -20,11 +21,45 @@ pub fn load_cell_uncalibrated(path: &Path) -> Result<CellFile, ConfigError> {
     parse_resolved(path, &read(path)?)
 }
 
-/// A cell file's schema, its paths made relative to its folder.
+/// A cell file's schema, the checks of its devices' tables that span two
+/// keys, and its paths made relative to its folder.
 fn parse_resolved(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
     let mut cell: CellFile = parse(path, text)?;
+    check_devices(&cell)
+        .map_err(|(keys, message)| invalid_at_key(path, text, keys, &keys.join("."), message))?;
     cell.resolve_paths(path.parent().unwrap_or(Path::new("")));
     Ok(cell)
+}
+
+/// What a value of one key cannot be given another's: the marker's id in
+/// its dictionary, the tactile polling rate on its serial link. The error
+/// is the offending key's path and the message.
+fn check_devices(cell: &CellFile) -> Result<(), (&'static [&'static str], String)> {
+    let marker = &cell.camera.marker;
+    let count = marker.dictionary.marker_count();
+    if !(0..count).contains(&marker.id) {
+        return Err((
+            &["camera", "marker", "id"],
+            format!(
+                "expected a marker id in [0, {}] (the dictionary holds {count} markers), found {}",
+                count - 1,
+                marker.id
+            ),
+        ));
+    }
+    if let TactileBackend::Remodel(remodel) = &cell.tactile.backend {
+        let top_hz = link_rate_hz(remodel.baud);
+        if cell.tactile.rate_hz > top_hz {
+            return Err((
+                &["tactile", "rate_hz"],
+                format!(
+                    "{} Hz is more than the link at {} baud carries: {top_hz:.0} samples/s of {SAMPLE_EXCHANGE_BYTES} bytes",
+                    cell.tactile.rate_hz, remodel.baud
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A cell file's schema, its paths made relative to its folder, and the
@@ -36,14 +71,7 @@ pub(crate) fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigErro
         return Ok(cell);
     };
     let refuse = |keys: &[&str], field: &str, message: String| {
-        let (line, column) = key_position(text, keys);
-        Err(ConfigError::Invalid {
-            path: path.to_owned(),
-            line,
-            column,
-            field: field.to_owned(),
-            message,
-        })
+        Err(invalid_at_key(path, text, keys, field, message))
     };
     if cell.camera.calibration.is_none() {
         return refuse(

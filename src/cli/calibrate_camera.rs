@@ -11,7 +11,7 @@ use cablecell::schema::FrameConfig;
 use nalgebra::Isometry3;
 use opencv::core::Mat;
 
-use super::Status;
+use super::{Status, device_error_status};
 
 /// Moves the arm through the cell file's `camera.calibration_poses`,
 /// captures the marker at each, solves for `base_from_camera`, prints it,
@@ -53,7 +53,7 @@ pub fn calibrate_camera(cell_path: &Path, seed: u64, speed_mm_s: f64, dry_run: b
                 eprintln!("error: calibration pose {index}: {error}");
                 // Best effort: the arm is left where it stopped.
                 let _ = cell.arm.stop();
-                return Status::DeviceFault;
+                return device_error_status(&error);
             }
         }
     }

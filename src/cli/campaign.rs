@@ -42,7 +42,8 @@ pub fn campaign(
             return match error {
                 CampaignError::Config(_)
                 | CampaignError::Exists { .. }
-                | CampaignError::SeedMismatch { .. } => Status::BadInput,
+                | CampaignError::SeedMismatch { .. }
+                | CampaignError::Foreign { .. } => Status::BadInput,
                 _ => Status::OutputFailed,
             };
         }

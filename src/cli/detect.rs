@@ -109,7 +109,11 @@ pub fn detect(
             Ok(output) => output,
             Err(error) => {
                 eprintln!("error: {}: {error}", path.display());
-                status = Status::TaskFailed;
+                status = if error.is_in_setup() {
+                    Status::BadInput
+                } else {
+                    Status::TaskFailed
+                };
                 continue;
             }
         };

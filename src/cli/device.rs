@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 use cablecell::hw::clock::MonotonicClock;
+use cablecell::hw::gripper::config::{GRIP_CURRENT_A, OPENING_MM};
 use cablecell::hw::gripper::smp::{Reply, state_bits};
 use cablecell::hw::gripper::{GripOutcome, Gripper, Pg70};
 use cablecell::hw::tactile::RemodelTactile;
@@ -12,7 +13,7 @@ use cablecell::perception::tactile::{BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame
 use clap::Subcommand;
 use serialport::TTYPort;
 
-use super::Status;
+use super::{Status, device_error_status, number_within};
 
 #[derive(Subcommand, Debug)]
 pub enum GripperAction {
@@ -23,16 +24,18 @@ pub enum GripperAction {
     /// Move the jaws to an opening, at the module's own speed and
     /// acceleration unless both are given.
     MovePos {
+        #[arg(value_parser = opening_mm)]
         opening_mm: f64,
         /// Jaw speed, mm/s (with --accel).
-        #[arg(long = "speed", value_name = "MM_S", requires = "accel_mm_s2")]
+        #[arg(long = "speed", value_name = "MM_S", requires = "accel_mm_s2", value_parser = speed_mm_s)]
         speed_mm_s: Option<f32>,
         /// Jaw acceleration, mm/s² (with --speed).
-        #[arg(long = "accel", value_name = "MM_S2", requires = "speed_mm_s")]
+        #[arg(long = "accel", value_name = "MM_S2", requires = "speed_mm_s", value_parser = accel_mm_s2)]
         accel_mm_s2: Option<f32>,
     },
     /// Close with a motor current until blocked.
     Grip {
+        #[arg(value_parser = current_a)]
         current_a: f64,
     },
     Stop,
@@ -48,11 +51,36 @@ pub enum TactileAction {
     Count,
     /// Read samples: the raw map, the bias-removed map, the sample rate.
     Read {
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, default_value_t = 100, value_parser = samples)]
         samples: usize,
         #[arg(long)]
         json: bool,
     },
+}
+
+fn opening_mm(text: &str) -> Result<f64, String> {
+    number_within(text, OPENING_MM, "mm")
+}
+
+/// 0.1 to 1000 mm/s: the PG70's jaws are far slower than 1 m/s, and a
+/// slower move than 0.1 mm/s would outlast any bring-up.
+fn speed_mm_s(text: &str) -> Result<f32, String> {
+    number_within(text, 0.1..=1000.0, "mm/s").map(|v: f64| v as f32)
+}
+
+/// 1 to 10 000 mm/s²: a jaw at 10 m/s² reaches any speed it has within a
+/// few millimetres.
+fn accel_mm_s2(text: &str) -> Result<f32, String> {
+    number_within(text, 1.0..=10_000.0, "mm/s²").map(|v: f64| v as f32)
+}
+
+fn current_a(text: &str) -> Result<f64, String> {
+    number_within(text, GRIP_CURRENT_A, "A")
+}
+
+/// 1 to 10 000 samples: 5 s at the link's 2 kHz, 100 s at 100 Hz.
+fn samples(text: &str) -> Result<usize, String> {
+    number_within(text, 1..=10_000, "samples")
 }
 
 #[derive(Subcommand, Debug)]
@@ -240,7 +268,7 @@ pub fn tactile(port: &str, baud: u32, action: &TactileAction) -> Status {
     let result = match action {
         TactileAction::Id => sensor.id(),
         TactileAction::Count => sensor.count().map(|n| n.to_string()),
-        TactileAction::Read { samples, json } => read(&mut sensor, (*samples).max(1), *json),
+        TactileAction::Read { samples, json } => read(&mut sensor, *samples, *json),
     };
     report(result)
 }
@@ -293,21 +321,14 @@ fn read(
 }
 
 fn report(result: Result<String, cablecell::hw::DeviceError>) -> Status {
-    use cablecell::hw::DeviceError;
     match result {
         Ok(text) => {
             println!("{text}");
             Status::Success
         }
-        // Refused by the limits before the arm was asked: the command
-        // line asked for too much.
-        Err(error @ (DeviceError::TooFast { .. } | DeviceError::OutsideWorkspace { .. })) => {
-            eprintln!("error: {error}");
-            Status::BadInput
-        }
         Err(error) => {
             eprintln!("error: {error}");
-            Status::DeviceFault
+            device_error_status(&error)
         }
     }
 }

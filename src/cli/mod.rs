@@ -16,7 +16,12 @@ pub mod run;
 pub mod tactile_fit;
 pub mod vision_io;
 
+use std::ops::RangeInclusive;
 use std::process::ExitCode;
+use std::str::FromStr;
+
+use cablecell::hw::DeviceError;
+use cablecell::schema::validate::{Bound, check_within};
 
 /// The documented exit statuses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -31,5 +36,29 @@ pub enum Status {
 impl From<Status> for ExitCode {
     fn from(status: Status) -> Self {
         ExitCode::from(status as u8)
+    }
+}
+
+/// A command-line number in `range` (`unit` its unit), for clap's
+/// `value_parser`: refused, with exit status 2, as a file's value out of
+/// its range is.
+pub fn number_within<T: FromStr + Bound>(
+    text: &str,
+    range: RangeInclusive<T>,
+    unit: &str,
+) -> Result<T, String> {
+    let value: T = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    check_within(value, &range, unit)
+}
+
+/// The exit status of a device error: a move that the cell's limits refused
+/// before the device was asked is bad input (the command line or the file
+/// asked for too much); anything else is a device fault.
+pub fn device_error_status(error: &DeviceError) -> Status {
+    match error {
+        DeviceError::TooFast { .. } | DeviceError::OutsideWorkspace { .. } => Status::BadInput,
+        _ => Status::DeviceFault,
     }
 }

@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 use cablecell::sim::render::{BackgroundChoice, SceneOptions, write_dataset};
 use clap::Args;
 
-use super::Status;
+use super::{Status, number_within};
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderDatasetArgs {
     /// The folder to write (created; must be empty or absent).
     pub out: PathBuf,
     /// How many images.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = count)]
     pub count: usize,
     /// The seed: image K is drawn from stream K of this seed, so the same
     /// seed and options give the same images, and a larger count only
@@ -24,25 +24,45 @@ pub struct RenderDatasetArgs {
     /// What the cables lie on.
     #[arg(long, value_enum, default_value = "any")]
     pub backgrounds: BackgroundArg,
-    #[arg(long, default_value_t = 640)]
+    #[arg(long, default_value_t = 640, value_parser = side_px)]
     pub width_px: i32,
-    #[arg(long, default_value_t = 480)]
+    #[arg(long, default_value_t = 480, value_parser = side_px)]
     pub height_px: i32,
     /// Fewest cables per image.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = cables)]
     pub min_cables: usize,
     /// Most cables per image.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = cables)]
     pub max_cables: usize,
     /// Thinnest cable, in pixels.
-    #[arg(long, default_value_t = 6.0)]
+    #[arg(long, default_value_t = 6.0, value_parser = diameter_px)]
     pub min_diameter_px: f64,
     /// Thickest cable, in pixels.
-    #[arg(long, default_value_t = 16.0)]
+    #[arg(long, default_value_t = 16.0, value_parser = diameter_px)]
     pub max_diameter_px: f64,
     /// Keep cables apart (no crossings).
     #[arg(long)]
     pub no_crossings: bool,
+}
+
+/// 1 to 100 000 images: a training set of a few thousand is plenty.
+fn count(text: &str) -> Result<usize, String> {
+    number_within(text, 1..=100_000, "images")
+}
+
+/// 16 to 4096 px a side: the pipeline works at 640 px wide.
+fn side_px(text: &str) -> Result<i32, String> {
+    number_within(text, 16..=4096, "px")
+}
+
+/// 0 to 16 cables: more do not fit apart on an image.
+fn cables(text: &str) -> Result<usize, String> {
+    number_within(text, 0..=16, "cables")
+}
+
+/// 1 to 100 px: thinner is no cable, thicker fills the image.
+fn diameter_px(text: &str) -> Result<f64, String> {
+    number_within(text, 1.0..=100.0, "px")
 }
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
@@ -90,25 +110,15 @@ pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
 /// The renderer's options from the command line, or what is wrong with
 /// them.
 fn scene_options(args: &RenderDatasetArgs) -> Result<SceneOptions, String> {
-    if args.width_px < 16 || args.height_px < 16 {
-        return Err(format!(
-            "--width-px and --height-px must be at least 16 (got {}×{})",
-            args.width_px, args.height_px
-        ));
-    }
     if args.min_cables > args.max_cables {
         return Err(format!(
             "--min-cables {} exceeds --max-cables {}",
             args.min_cables, args.max_cables
         ));
     }
-    let diameters_ok = args.min_diameter_px.is_finite()
-        && args.max_diameter_px.is_finite()
-        && args.min_diameter_px >= 1.0
-        && args.min_diameter_px <= args.max_diameter_px;
-    if !diameters_ok {
+    if args.min_diameter_px > args.max_diameter_px {
         return Err(format!(
-            "cable diameters must satisfy 1 ≤ --min-diameter-px ≤ --max-diameter-px (got {} and {})",
+            "--min-diameter-px {} exceeds --max-diameter-px {}",
             args.min_diameter_px, args.max_diameter_px
         ));
     }

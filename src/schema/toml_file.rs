@@ -34,7 +34,7 @@ pub enum ConfigError {
 
 /// Line and column of the last key of `keys` (a path of tables), or of the
 /// file's start if it cannot be found.
-pub fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
+fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
     let offset = toml_edit::Document::parse(text).ok().and_then(|document| {
         let (last, tables) = keys.split_last()?;
         let mut table: &dyn toml_edit::TableLike = document.as_table();
@@ -44,6 +44,26 @@ pub fn key_position(text: &str, keys: &[&str]) -> (usize, usize) {
         table.key(last)?.span().map(|span| span.start)
     });
     line_column(text, offset.unwrap_or(0))
+}
+
+/// The error `message` about `field`, at the key `keys` (a path of tables)
+/// of the file `path` holding `text`: for checks made after the file was
+/// read, which span several keys or files.
+pub fn invalid_at_key(
+    path: &Path,
+    text: &str,
+    keys: &[&str],
+    field: &str,
+    message: String,
+) -> ConfigError {
+    let (line, column) = key_position(text, keys);
+    ConfigError::Invalid {
+        path: path.to_owned(),
+        line,
+        column,
+        field: field.to_owned(),
+        message,
+    }
 }
 
 pub fn read(path: &Path) -> Result<String, ConfigError> {

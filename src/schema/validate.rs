@@ -1,7 +1,78 @@
 //! Range checks run while a file is deserialised, so that a bad value is
 //! reported at its own line and column (`#[serde(deserialize_with = ...)]`).
 
+use std::ops::RangeInclusive;
+
 use serde::{Deserialize, Deserializer, de::Error};
+
+/// A value in `range` (`unit` names its unit in the message, if it has
+/// one). A field with a range of its own uses it through a function beside
+/// the field whose doc comment says why that range.
+pub fn within<'de, D, T>(d: D, range: RangeInclusive<T>, unit: &str) -> Result<T, D::Error>
+where
+    D: Deserializer<'de>,
+    T: Deserialize<'de> + Bound,
+{
+    check_within(T::deserialize(d)?, &range, unit).map_err(D::Error::custom)
+}
+
+/// [`within`] for a value that comes from elsewhere than a file (a command
+/// line option): the value, or the message that refuses it. A NaN is in no
+/// range.
+pub fn check_within<T: Bound>(
+    value: T,
+    range: &RangeInclusive<T>,
+    unit: &str,
+) -> Result<T, String> {
+    if range.contains(&value) {
+        return Ok(value);
+    }
+    Err(format!(
+        "expected a value in [{}, {}]{}, found {}",
+        range.start().text(),
+        range.end().text(),
+        spaced(unit),
+        value.text()
+    ))
+}
+
+/// ` unit`, or nothing for a number without one.
+fn spaced(unit: &str) -> String {
+    if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    }
+}
+
+/// A number a range can bound, written short in messages.
+pub trait Bound: PartialOrd + Copy {
+    fn text(self) -> String;
+}
+
+impl Bound for f64 {
+    /// Very large and very small numbers in exponent form (`1e308`, not
+    /// 309 digits).
+    fn text(self) -> String {
+        let magnitude = self.abs();
+        if magnitude != 0.0 && !(1e-4..1e9).contains(&magnitude) {
+            format!("{self:e}")
+        } else {
+            format!("{self}")
+        }
+    }
+}
+
+macro_rules! integer_bound {
+    ($($t:ty),*) => {$(
+        impl Bound for $t {
+            fn text(self) -> String {
+                self.to_string()
+            }
+        }
+    )*};
+}
+integer_bound!(u8, u32, u64, usize, i32);
 
 /// A number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
@@ -82,16 +153,6 @@ pub fn some_fraction<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::
     fraction(d).map(Some)
 }
 
-/// A count ≥ 1.
-pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    let v = usize::deserialize(d)?;
-    if v >= 1 {
-        Ok(v)
-    } else {
-        Err(D::Error::custom("expected a count ≥ 1, found 0"))
-    }
-}
-
 /// A count of moves the cell makes one after the other, in 1..=100:
 /// more would keep a cell busy for many minutes, a likely slip.
 pub fn moves<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
@@ -129,24 +190,26 @@ pub fn unit_vector3<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Erro
 
 /// A range of voltages `[low, high]` within the 3.3 V ADC.
 pub fn voltage_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-    let [low, high] = <[f64; 2]>::deserialize(d)?;
-    if (0.0..=3.3).contains(&low) && (low..=3.3).contains(&high) {
-        Ok([low, high])
-    } else {
-        Err(D::Error::custom(format!(
-            "expected [low, high] with 0 ≤ low ≤ high ≤ 3.3 V, found [{low}, {high}]"
-        )))
-    }
+    range_within(d, 0.0..=3.3, "V")
 }
 
-/// A range `[low, high]` of numbers with 0 ≤ low ≤ high.
-pub fn non_negative_range<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+/// A range `[low, high]` of numbers, low ≤ high, both in `bounds`.
+pub fn range_within<'de, D: Deserializer<'de>>(
+    d: D,
+    bounds: RangeInclusive<f64>,
+    unit: &str,
+) -> Result<[f64; 2], D::Error> {
     let [low, high] = <[f64; 2]>::deserialize(d)?;
-    if low >= 0.0 && low <= high && high.is_finite() {
+    if bounds.contains(&low) && bounds.contains(&high) && low <= high {
         Ok([low, high])
     } else {
         Err(D::Error::custom(format!(
-            "expected [low, high] with 0 ≤ low ≤ high, found [{low}, {high}]"
+            "expected [low, high] with {} ≤ low ≤ high ≤ {}{}, found [{}, {}]",
+            bounds.start().text(),
+            bounds.end().text(),
+            spaced(unit),
+            low.text(),
+            high.text()
         )))
     }
 }

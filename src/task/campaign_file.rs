@@ -5,11 +5,10 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Deserializer, de::Error};
 
-use super::task_file::Tolerance;
+use super::task_file::{Tolerance, optional_correction_gain, regrasp_count};
 use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
-use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::schema::validate::{at_least_one, non_negative, non_negative_range, some_fraction};
+use crate::schema::validate::{range_within, some_fraction, within};
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -33,7 +32,7 @@ pub struct CampaignSection {
     /// The cell file, relative to the campaign file.
     pub cell: PathBuf,
     /// Trials per policy (the paper made 20).
-    #[serde(default = "paper_trials", deserialize_with = "at_least_one")]
+    #[serde(default = "paper_trials", deserialize_with = "trial_count")]
     pub trials: usize,
     pub seed: u64,
     /// Output folder, relative to the working directory.
@@ -44,6 +43,14 @@ fn paper_trials() -> usize {
     20
 }
 
+/// 1 to 10 000 trials per policy: every trial's entry is held in memory for
+/// the summary and in the journal (a few kB each).
+pub const TRIALS: std::ops::RangeInclusive<usize> = 1..=10_000;
+
+fn trial_count<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    within(d, TRIALS, "trials")
+}
+
 /// What varies from trial to trial; each trial draws its own values from
 /// its seed.
 #[derive(Debug, Clone, Deserialize)]
@@ -52,20 +59,20 @@ pub struct Perturbations {
     /// Largest offset of the start grasp frame across the cable, drawn
     /// uniformly within ± (the paper's "small random offset on the initial
     /// reference frame"; a uniform draw keeps every start within reach).
-    #[serde(deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "start_offset_max_mm")]
     pub start_offset_max_mm: f64,
     /// Largest angle of the start grasp frame about the pad's normal,
     /// likewise.
-    #[serde(deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "start_angle_max_rad")]
     pub start_angle_max_rad: f64,
     /// Range of the cable's diameter, drawn uniformly.
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "cable_diameter_mm")]
     pub cable_diameter_mm: [f64; 2],
     /// Range of the cable's bending stiffness EI, drawn uniformly.
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "cable_stiffness_n_mm2")]
     pub cable_stiffness_n_mm2: [f64; 2],
     /// Range of the tactile noise (fraction of the taxels' swing).
-    #[serde(deserialize_with = "non_negative_range")]
+    #[serde(deserialize_with = "sensor_noise_fraction")]
     pub sensor_noise_fraction: [f64; 2],
     /// What finds the cable at each trial's start.
     #[serde(default)]
@@ -87,6 +94,33 @@ pub enum TrialStart {
     Detector,
 }
 
+/// 0 to 50 mm: the pad is 18 mm across, so a start farther off misses it by
+/// far.
+fn start_offset_max_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 0.0..=50.0, "mm")
+}
+
+/// 0 to π/2: a cable's direction on the pad is an angle in (−π/2, π/2].
+fn start_angle_max_rad<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 0.0..=std::f64::consts::FRAC_PI_2, "rad")
+}
+
+/// 0.1 to 20 mm: from a thread to a cable wider than the pad holds.
+fn cable_diameter_mm<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 0.1..=20.0, "mm")
+}
+
+/// 1e-6 to 1e9 N·mm²: from a thread to a steel bar (a 2.5 mm PVC wire is
+/// 60), and never 0, which no simulated cable has.
+fn cable_stiffness_n_mm2<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 1e-6..=1e9, "N·mm²")
+}
+
+/// A fraction of the taxels' swing, as the simulated pad's own noise.
+fn sensor_noise_fraction<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    range_within(d, 0.0..=1.0, "")
+}
+
 /// An estimator and a regrasp budget.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -94,12 +128,13 @@ pub struct Policy {
     pub name: String,
     pub estimator: Estimator,
     /// Regrasps allowed; a policy stops regrasping once within tolerance.
+    #[serde(deserialize_with = "regrasp_count")]
     pub max_regrasps: u32,
     /// The tolerance it regrasps towards, if not the task's.
     #[serde(default)]
     pub tolerance: Option<Tolerance>,
     /// How much of T_corr it applies, if not the task's.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "optional_correction_gain")]
     pub correction_gain: Option<CorrectionGain>,
     /// Error sources switched off for this policy, to show what each one
     /// costs (an error budget). Simulated cells only.
@@ -163,10 +198,6 @@ fn policies<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Policy>, D::Error> {
 }
 
 impl CampaignFile {
-    pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        parse(path, &read(path)?)
-    }
-
     /// The task file's path as the campaign file names it.
     pub fn task_path(&self, campaign_path: &Path) -> PathBuf {
         relative_to(campaign_path, &self.campaign.task)

@@ -3,8 +3,10 @@
 use std::path::Path;
 
 use super::{CampaignFile, TaskFile};
+use crate::cell::CellFile;
 use crate::cell::load::parse_cell;
-use crate::schema::toml_file::{ConfigError, key_position, parse, read};
+use crate::schema::toml_file::{ConfigError, invalid_at_key, parse, read};
+use crate::task::campaign_file::Sensing;
 
 /// What `check_file` found a file to be.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,16 +35,15 @@ pub fn load_task(path: &Path) -> Result<TaskFile, ConfigError> {
 pub fn parse_task(path: &Path, text: &str) -> Result<TaskFile, ConfigError> {
     let task: TaskFile = parse(path, text)?;
     if task.task.touch_only && task.prior.is_none() {
-        let (line, column) = key_position(text, &["task", "touch_only"]);
-        return Err(ConfigError::Invalid {
-            path: path.to_owned(),
-            line,
-            column,
-            field: "task.touch_only".to_owned(),
-            message: "a touch-only task searches from where the cable roughly lies: \
-                      add a [prior] table (docs/files.md)"
+        return Err(invalid_at_key(
+            path,
+            text,
+            &["task", "touch_only"],
+            "task.touch_only",
+            "a touch-only task searches from where the cable roughly lies: \
+             add a [prior] table (docs/files.md)"
                 .to_owned(),
-        });
+        ));
     }
     Ok(task)
 }
@@ -56,10 +57,56 @@ pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
     } else if table.contains_key("cell") {
         parse_cell(path, &text).map(|_| FileKind::Cell)
     } else if table.contains_key("campaign") {
-        parse::<CampaignFile>(path, &text).map(|_| FileKind::Campaign)
+        parse_campaign(path, &text).map(|_| FileKind::Campaign)
     } else {
         Err(ConfigError::UnknownKind {
             path: path.to_owned(),
         })
     }
+}
+
+/// Loads a campaign file with the task and cell files it names. A task or
+/// cell file that cannot be read is reported at the campaign file's line
+/// that names it; one that is invalid, at its own line.
+pub fn load_campaign(path: &Path) -> Result<(CampaignFile, TaskFile, CellFile), ConfigError> {
+    parse_campaign(path, &read(path)?)
+}
+
+fn parse_campaign(
+    path: &Path,
+    text: &str,
+) -> Result<(CampaignFile, TaskFile, CellFile), ConfigError> {
+    let file: CampaignFile = parse(path, text)?;
+    let named_here = |key: &'static str| {
+        move |error: ConfigError| match error {
+            ConfigError::Read { .. } => invalid_at_key(
+                path,
+                text,
+                &["campaign", key],
+                &format!("campaign.{key}"),
+                error.to_string(),
+            ),
+            other => other,
+        }
+    };
+    let task = load_task(&file.task_path(path)).map_err(named_here("task"))?;
+    if let Some(policy) = file.policies.iter().find(|p| p.sensing == Sensing::Touch)
+        && task.prior.is_none()
+    {
+        return Err(invalid_at_key(
+            path,
+            text,
+            &["campaign", "task"],
+            "campaign.task",
+            format!(
+                "policy `{}` is touch only, but the task has no [prior] to search from",
+                policy.name
+            ),
+        ));
+    }
+    let cell_path = file.cell_path(path);
+    let cell = read(&cell_path)
+        .and_then(|cell_text| parse_cell(&cell_path, &cell_text))
+        .map_err(named_here("cell"))?;
+    Ok((file, task, cell))
 }

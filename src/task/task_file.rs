@@ -1,12 +1,13 @@
 //! The task file: what the cell is asked to do.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
-use crate::perception::tactile::Estimator;
+use crate::hw::gripper::config::{GRIP_CURRENT_A, OPENING_MM};
 use crate::perception::tactile::search::Prior;
+use crate::perception::tactile::{CONTACT_THRESHOLD_V, Estimator};
 use crate::schema::FrameConfig;
-use crate::schema::validate::{angle_spread, at_least_one, finite, line_angle, moves, positive};
+use crate::schema::validate::{angle_spread, finite, line_angle, moves, positive, within};
 
 /// A task file, e.g. `tasks/regrasp.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -111,7 +112,7 @@ impl Tolerance {
 pub struct Approach {
     /// Distance back from the grasp pose, along the approach axis, at which
     /// the arm stops before descending onto the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "travel_mm")]
     pub standoff_mm: f64,
     /// Cartesian speed of every arm motion of the task.
     #[serde(deserialize_with = "positive")]
@@ -122,10 +123,10 @@ pub struct Approach {
 #[serde(deny_unknown_fields)]
 pub struct Grasp {
     /// Jaw opening before closing on the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "open_mm")]
     pub open_mm: f64,
     /// Motor current of the gripper's grip command (PG70 MOVE_GRIP).
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "grip_current_a")]
     pub grip_current_a: f64,
 }
 
@@ -133,14 +134,18 @@ pub struct Grasp {
 #[serde(deny_unknown_fields)]
 pub struct Regrasp {
     /// Regrasps allowed after the trial grasp (the paper makes one).
+    #[serde(deserialize_with = "regrasp_count")]
     pub max_regrasps: u32,
     /// How far the open fingers back off along the approach axis before
     /// moving by T_corr, so that they do not drag the cable.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "travel_mm")]
     pub retreat_mm: f64,
     /// How much of T_corr each regrasp applies (default: all of it, as the
     /// paper does); above 1 it makes up for a cable that springs back.
-    #[serde(default = "paper_gain")]
+    #[serde(
+        default = "paper_gain",
+        deserialize_with = "CorrectionGainInFile::deserialize"
+    )]
     pub correction_gain: CorrectionGain,
 }
 
@@ -148,18 +153,74 @@ fn paper_gain() -> CorrectionGain {
     CorrectionGain::PAPER
 }
 
+/// 0 to 100 regrasps: the correction converges in one or two, and each
+/// regrasp's maps and fits stay in the run's record.
+pub(crate) fn regrasp_count<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    within(d, 0..=100, "regrasps")
+}
+
+/// A correction gain as a file writes it, `{ n = …, alpha = … }`.
+#[derive(Deserialize)]
+#[serde(remote = "CorrectionGain", deny_unknown_fields)]
+struct CorrectionGainInFile {
+    #[serde(deserialize_with = "gain")]
+    n: f64,
+    #[serde(deserialize_with = "gain")]
+    alpha: f64,
+}
+
+/// 0 to 2: a regrasp with gain g leaves 1 − g of the error it corrects, so
+/// 0 corrects nothing, 1 is the paper's whole T_corr, and beyond 2 each
+/// regrasp overshoots by more than the error and repeated regrasps diverge.
+fn gain<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 0.0..=2.0, "")
+}
+
+/// An optional correction gain (a campaign's policy), checked as the task
+/// file's.
+pub(crate) fn optional_correction_gain<'de, D: Deserializer<'de>>(
+    d: D,
+) -> Result<Option<CorrectionGain>, D::Error> {
+    CorrectionGainInFile::deserialize(d).map(Some)
+}
+
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TactileEvaluation {
     /// Frames averaged for the bias (the paper: the first 50).
-    #[serde(deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "frame_count")]
     pub bias_samples: usize,
     /// Frames averaged for each evaluation of a grasp.
-    #[serde(deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "frame_count")]
     pub average_frames: usize,
     /// Peak Δv below which the pad is taken to touch nothing.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "contact_threshold_v")]
     pub contact_threshold_v: f64,
     /// `centroids` (the paper's) or `ridge` (cablecell's).
     pub estimator: Estimator,
+}
+
+/// 1 to 1000 frames: 2 s at the paper's 500 Hz (it averages 10 and 50),
+/// 10 s at the slowest polling rate a cell file allows.
+fn frame_count<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    within(d, 1..=1000, "frames")
+}
+
+/// 1 to 500 mm of travel back from the cable: beyond half a metre the hand
+/// leaves any cell's workspace.
+fn travel_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 1.0..=500.0, "mm")
+}
+
+/// At least 1 mm (the thinnest cable) and within the PG70's stroke.
+fn open_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 1.0..=*OPENING_MM.end(), "mm")
+}
+
+fn grip_current_a<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, GRIP_CURRENT_A, "A")
+}
+
+fn contact_threshold_v<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, CONTACT_THRESHOLD_V, "V")
 }

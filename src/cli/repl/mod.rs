@@ -95,6 +95,12 @@ pub fn repl(
                 continue;
             }
             Err(ReadlineError::Eof) => break,
+            // A byte that is no UTF-8 (a stray key, a paste in another
+            // encoding) loses that line only.
+            Err(ReadlineError::Io(error)) if error.kind() == std::io::ErrorKind::InvalidData => {
+                println!("cannot: the line is not valid UTF-8; type it again");
+                continue;
+            }
             Err(error) => {
                 eprintln!("error: cannot read the terminal: {error}");
                 break;

@@ -89,6 +89,18 @@ pub enum MarkerDictionary {
     ArucoOriginal,
 }
 
+impl MarkerDictionary {
+    /// How many markers the dictionary holds: their ids run from 0.
+    pub fn marker_count(self) -> i32 {
+        match self {
+            MarkerDictionary::Aruco4x4_50 => 50,
+            MarkerDictionary::Aruco5x5_100 => 100,
+            MarkerDictionary::Aruco6x6_250 => 250,
+            MarkerDictionary::ArucoOriginal => 1024,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationConfig {

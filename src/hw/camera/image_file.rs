@@ -7,6 +7,8 @@ use opencv::core::Mat;
 use opencv::imgcodecs;
 use opencv::prelude::*;
 
+use super::jpeg::{JpegFault, check};
+
 /// Why an image file could not be read; every message starts with the
 /// file's path.
 #[derive(Debug, thiserror::Error)]
@@ -36,6 +38,11 @@ pub enum ImageError {
     /// Fix: copy or capture the image again.
     #[error("{path}: the JPEG data stops before its end-of-image marker: the file is truncated")]
     TruncatedJpeg { path: PathBuf },
+    /// The file is a JPEG whose data is damaged (`reason`: what libjpeg
+    /// would warn of): libjpeg would decode it anyway, garbled. Fix: copy
+    /// or capture the image again.
+    #[error("{path}: the JPEG data is corrupt ({reason})")]
+    CorruptJpeg { path: PathBuf, reason: String },
     /// OpenCV failed reading the image (`source`: its error). Fix: check
     /// that the file is an image OpenCV can decode (PNG, JPEG, ...).
     #[error("{path}: cannot read the image: {source}")]
@@ -58,6 +65,7 @@ impl ImageError {
             | ImageError::NotFound { path, .. }
             | ImageError::Unreadable { path, .. }
             | ImageError::TruncatedJpeg { path }
+            | ImageError::CorruptJpeg { path, .. }
             | ImageError::Decode { path, .. }
             | ImageError::NotAnImage { path } => path,
         }
@@ -81,10 +89,17 @@ pub fn read_image(path: &Path) -> Result<Mat, ImageError> {
             source,
         },
     })?;
-    if !jpeg_is_whole(&bytes) {
-        // libjpeg would decode the part before the cut, grey the rest and
-        // warn on stderr without the file's name.
-        return Err(ImageError::TruncatedJpeg { path: path_buf() });
+    // libjpeg would decode a cut or damaged JPEG, grey or garble what it
+    // could not read and warn on stderr without the file's name.
+    match check(&bytes) {
+        Ok(()) => {}
+        Err(JpegFault::Truncated) => return Err(ImageError::TruncatedJpeg { path: path_buf() }),
+        Err(JpegFault::Corrupt(reason)) => {
+            return Err(ImageError::CorruptJpeg {
+                path: path_buf(),
+                reason,
+            });
+        }
     }
     let name = path.display().to_string();
     let image =
@@ -98,93 +113,16 @@ pub fn read_image(path: &Path) -> Result<Mat, ImageError> {
     Ok(image)
 }
 
-/// Whether JPEG data runs to its end-of-image marker. Walks the markers,
-/// skipping each segment by its length (so an EXIF thumbnail's own end
-/// marker does not count) and the entropy-coded data byte by byte (in
-/// which 0xFF is always followed by 0x00, a restart marker or fill).
-/// Anything that does not start like a JPEG is not judged here.
-fn jpeg_is_whole(bytes: &[u8]) -> bool {
-    const SOI: [u8; 2] = [0xFF, 0xD8];
-    const EOI: u8 = 0xD9;
-    if !bytes.starts_with(&SOI) {
-        return true;
-    }
-    let mut at = SOI.len();
-    while at + 1 < bytes.len() {
-        if bytes[at] != 0xFF {
-            at += 1;
-            continue;
-        }
-        match bytes[at + 1] {
-            EOI => return true,
-            // Fill byte before a marker.
-            0xFF => at += 1,
-            // A stuffed data byte, TEM, restart markers, SOI: no length.
-            0x00 | 0x01 | 0xD0..=0xD8 => at += 2,
-            _ => {
-                let Some(length) = bytes.get(at + 2..at + 4) else {
-                    return false;
-                };
-                at += 2 + usize::from(u16::from_be_bytes([length[0], length[1]]));
-            }
-        }
-    }
-    false
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use opencv::core::{CV_8UC3, Scalar, Vector};
-
-    /// A small noisy JPEG as OpenCV writes it.
-    fn jpeg_bytes() -> Vec<u8> {
-        let mut image =
-            Mat::new_rows_cols_with_default(48, 64, CV_8UC3, Scalar::all(0.0)).expect("image");
-        opencv::core::randu(&mut image, &Scalar::all(0.0), &Scalar::all(255.0)).expect("noise");
-        let mut bytes = Vector::<u8>::new();
-        assert!(imgcodecs::imencode_def(".jpg", &image, &mut bytes).expect("encode"));
-        bytes.to_vec()
-    }
-
-    #[test]
-    fn a_whole_jpeg_is_whole_and_every_cut_of_it_is_not() {
-        let bytes = jpeg_bytes();
-        assert!(jpeg_is_whole(&bytes));
-        for cut in 2..bytes.len() {
-            assert!(
-                !jpeg_is_whole(&bytes[..cut]),
-                "cut at {cut} of {}",
-                bytes.len()
-            );
-        }
-    }
-
-    #[test]
-    fn data_after_the_end_marker_and_a_thumbnail_s_end_marker_are_told_apart() {
-        let bytes = jpeg_bytes();
-        let mut trailing = bytes.clone();
-        trailing.extend_from_slice(b"camera maker's trailer");
-        assert!(jpeg_is_whole(&trailing));
-
-        // An APP1 segment holding a whole JPEG (as an EXIF thumbnail does),
-        // in front of a truncated main image.
-        let thumbnail = jpeg_bytes();
-        let length = u16::try_from(thumbnail.len() + 2).expect("fits");
-        let mut with_thumbnail = vec![0xFF, 0xD8, 0xFF, 0xE1];
-        with_thumbnail.extend_from_slice(&length.to_be_bytes());
-        with_thumbnail.extend_from_slice(&thumbnail);
-        with_thumbnail.extend_from_slice(&bytes[2..]);
-        assert!(jpeg_is_whole(&with_thumbnail));
-        with_thumbnail.truncate(with_thumbnail.len() - 100);
-        assert!(!jpeg_is_whole(&with_thumbnail));
-    }
+    use crate::hw::camera::jpeg::tests::{jpeg_bytes, scan_data_start};
 
     #[test]
     fn a_truncated_jpeg_file_is_an_error_that_names_it() {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("cut.jpg");
-        let bytes = jpeg_bytes();
+        let bytes = jpeg_bytes(&[]);
         std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
         let error = read_image(&path).expect_err("truncated");
         assert!(
@@ -198,6 +136,26 @@ mod tests {
         );
         std::fs::write(&path, &bytes).expect("write");
         let image = read_image(&path).expect("whole");
-        assert_eq!((image.cols(), image.rows()), (64, 48));
+        assert_eq!((image.cols(), image.rows()), (32, 24));
+    }
+
+    #[test]
+    fn a_corrupt_jpeg_file_is_an_error_that_names_it() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("corrupt.jpg");
+        let mut bytes = jpeg_bytes(&[]);
+        // An end-of-image marker halfway through the scan, the file's
+        // length kept: libjpeg would decode it, greying the rest.
+        let middle = (scan_data_start(&bytes) + bytes.len()) / 2;
+        bytes[middle..middle + 2].copy_from_slice(&[0xFF, 0xD9]);
+        std::fs::write(&path, &bytes).expect("write");
+        let error = read_image(&path).expect_err("corrupt");
+        assert_eq!(error.path(), path);
+        assert!(
+            error
+                .to_string()
+                .contains("corrupt.jpg: the JPEG data is corrupt (premature end of data segment)"),
+            "{error}"
+        );
     }
 }

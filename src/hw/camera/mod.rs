@@ -3,6 +3,7 @@
 
 pub mod config;
 mod image_file;
+mod jpeg;
 mod opencv_camera;
 mod sim;
 

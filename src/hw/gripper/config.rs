@@ -1,10 +1,19 @@
 //! The gripper's table of a cell file: which backend, on which port.
 
+use std::ops::RangeInclusive;
+
 use serde::Deserialize;
 
 use super::pg70_emulator::Misbehaviour;
 use crate::hw::emulator::Fault;
 use crate::schema::validate::positive;
+
+/// Jaw openings the PG70 reaches: its full stroke, 34 mm a jaw.
+pub const OPENING_MM: RangeInclusive<f64> = 0.0..=68.0;
+
+/// Grip currents: the PG70's motor grips with a few amperes; 0.1 A moves
+/// nothing and 10 A is beyond any it takes.
+pub const GRIP_CURRENT_A: RangeInclusive<f64> = 0.1..=10.0;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -8,21 +8,46 @@ use super::remodel_emulator::Misbehaviour;
 use crate::hw::emulator::Fault;
 use crate::perception::tactile::TAXEL_COUNT;
 use crate::schema::FrameConfig;
-use crate::schema::validate::positive;
+use crate::schema::validate::within;
 use crate::sim::tactile_model::SimTactileConfig;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TactileConfig {
     /// Distance between neighbouring taxel centres (3.55 mm on the paper's pad).
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "pitch_mm")]
     pub pitch_mm: f64,
     /// Polling rate of the sensor (500 Hz in the paper).
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "rate_hz")]
     pub rate_hz: f64,
     /// Where the pad sits on the hand: the sensor frame in the TCP frame.
     pub tcp_from_sensor: FrameConfig,
     pub backend: TactileBackend,
+}
+
+/// Taxel pitches of a fingertip pad: 1 mm (the densest tactile arrays) to
+/// 20 mm (a 5×5 pad 10 cm across, wider than any finger).
+pub const PITCH_MM: std::ops::RangeInclusive<f64> = 1.0..=20.0;
+
+fn pitch_mm<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, PITCH_MM, "mm")
+}
+
+/// Bytes of one sample exchange on the REMODEL link: the request `'a'` and
+/// its 50-byte answer.
+pub const SAMPLE_EXCHANGE_BYTES: f64 = 51.0;
+
+/// Samples per second a serial link at `baud` carries (10 bits a byte, 8N1).
+pub fn link_rate_hz(baud: u32) -> f64 {
+    f64::from(baud) / (10.0 * SAMPLE_EXCHANGE_BYTES)
+}
+
+/// 100 Hz (a fifth of the paper's 500 Hz, so that a task's largest frame
+/// count, 1000, takes 10 s) to what the REMODEL link carries at its 1 Mbaud,
+/// about 1.96 kHz; a slower `baud` lowers the top (checked when the cell
+/// loads).
+fn rate_hz<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    within(d, 100.0..=link_rate_hz(remodel_baud()).floor(), "Hz")
 }
 
 /// Which tactile sensor: `sim` simulated (no driver), `remodel` the real

@@ -55,6 +55,10 @@ impl fmt::Display for Direction {
     }
 }
 
+/// Contact thresholds that can tell touch from none: from 1 mV (the 12-bit
+/// ADC's step is 0.8 mV) to 3.3 V, the ADC's whole span.
+pub const CONTACT_THRESHOLD_V: std::ops::RangeInclusive<f64> = 0.001..=3.3;
+
 /// The pad's geometry and when a taxel counts as touched.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

@@ -22,6 +22,7 @@ pub mod search;
 pub use bias::{Bias, BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame};
 pub use estimator::{Estimate, Estimator};
 pub use fit::{
-    Centroid, Direction, FitConfig, FitError, PAPER_PITCH_MM, Quadratic, WireFit, fit_wire,
+    CONTACT_THRESHOLD_V, Centroid, Direction, FitConfig, FitError, PAPER_PITCH_MM, Quadratic,
+    WireFit, fit_wire,
 };
 pub use map::{ADC_MAX, MapError, TAXEL_COLS, TAXEL_COUNT, TAXEL_ROWS, TactileMap, raw_to_volts};

@@ -126,6 +126,20 @@ pub enum VisionError {
     NoCableMasks,
 }
 
+impl VisionError {
+    /// Whether the error lies in what the pipeline was given to work with
+    /// (its network: no model, a file that is no network, no runtime)
+    /// rather than in an image: every image would fail alike, so the
+    /// command's input is at fault.
+    pub fn is_in_setup(&self) -> bool {
+        match self {
+            VisionError::NoNetwork => true,
+            VisionError::Network { source } => source.is_in_setup(),
+            _ => false,
+        }
+    }
+}
+
 /// Wraps an OpenCV error with the stage it happened in, for `map_err`.
 pub(crate) fn cv(stage: &'static str) -> impl FnOnce(opencv::Error) -> VisionError {
     move |source| VisionError::OpenCv { stage, source }

@@ -194,6 +194,25 @@ pub enum NetworkError {
     },
 }
 
+impl NetworkError {
+    /// Whether the model or the runtime library is at fault (missing, no
+    /// network, the wrong shape, the wrong library) rather than one image.
+    pub fn is_in_setup(&self) -> bool {
+        matches!(
+            self,
+            NetworkError::ModelMissing { .. }
+                | NetworkError::RuntimeMissing { .. }
+                | NetworkError::RuntimeNotAFile { .. }
+                | NetworkError::RuntimeConflict { .. }
+                | NetworkError::RuntimeLoad { .. }
+                | NetworkError::Runtime { .. }
+                | NetworkError::ModelInvalid { .. }
+                | NetworkError::ModelShape { .. }
+                | NetworkError::OutputShape { .. }
+        )
+    }
+}
+
 /// Wraps an OpenCV error with the stage it happened in, for `map_err`.
 fn cv(stage: &'static str) -> impl FnOnce(opencv::Error) -> NetworkError {
     move |source| NetworkError::OpenCv { stage, source }
