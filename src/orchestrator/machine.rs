@@ -338,6 +338,7 @@ impl GraspTask {
                 error: line.error_to(&context.plan.target),
                 estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
             }),
+            shapes: None,
         });
         let fit = match fit {
             Ok(fit) => fit,
@@ -588,6 +589,7 @@ mod tests {
             assert_eq!(self.feed(bias), Some(Command::Detect));
             let detection = CableDetection {
                 base_from_cable: Isometry3::identity(),
+                centre_line: Vec::new(),
             };
             let moved = self.feed(Event::Detected(Detections {
                 cables: vec![detection],
@@ -763,6 +765,7 @@ mod tests {
         h.feed(Event::Detected(Detections {
             cables: vec![CableDetection {
                 base_from_cable: Isometry3::identity(),
+                centre_line: Vec::new(),
             }],
             image: None,
         }));
