@@ -24,6 +24,10 @@ pub struct RunRecord {
     pub outcome: Option<RunOutcome>,
     /// Devices that could not be made safe after a fault.
     pub safe_stop_problems: Vec<String>,
+    /// How the cable was found without the camera; `None` (and left out
+    /// of the JSON) when the detector placed it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touch_only: Option<TouchOnlyRecord>,
 }
 
 impl RunRecord {
@@ -44,7 +48,17 @@ impl RunRecord {
             grasps: Vec::new(),
             outcome: None,
             safe_stop_problems: Vec::new(),
+            touch_only: None,
         }
+    }
+
+    /// The latest grasp whose pad was read, a search's miss included (a
+    /// search ends at the first grasp that feels the cable, so its misses
+    /// come before every grasp of `grasps`).
+    pub fn latest_grasp(&self) -> Option<&GraspRecord> {
+        self.grasps
+            .last()
+            .or_else(|| self.touch_only.as_ref()?.misses.last())
     }
 
     /// The state the machine entered last, as recorded; `None` before
@@ -67,6 +81,42 @@ impl RunRecord {
                     .map(|left| left.t_s - entered.t_s),
             })
             .collect()
+    }
+}
+
+/// A run that looked for the cable by touch alone, from the task's prior.
+#[derive(Debug, Clone, Serialize)]
+pub struct TouchOnlyRecord {
+    #[serde(flatten)]
+    pub why: WhyTouchOnly,
+    /// Grasps made at the search's poses, the one that felt the cable
+    /// included (it is also the trial grasp of `grasps`).
+    pub search_moves: u32,
+    /// The search's grasps whose pad felt nothing, in order (a grasp whose
+    /// jaws closed on nothing is counted, not read).
+    pub misses: Vec<GraspRecord>,
+}
+
+/// Why the camera was not used.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "why", rename_all = "snake_case")]
+pub enum WhyTouchOnly {
+    /// The task asks for it (`[task] touch_only = true`).
+    Forced,
+    /// The detector found no cable.
+    NoCableDetected,
+    /// The detector could not look: `error` says why.
+    DetectorUnusable { error: String },
+}
+
+impl std::fmt::Display for WhyTouchOnly {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WhyTouchOnly::Forced => write!(f, "the task is touch only"),
+            WhyTouchOnly::NoCableDetected => write!(f, "no cable detected"),
+            // The device's error names the device: `detector: …`.
+            WhyTouchOnly::DetectorUnusable { error } => f.write_str(error),
+        }
     }
 }
 
@@ -194,6 +244,15 @@ pub enum Failure {
     FitFailed { attempt: u32, error: String },
     /// Still out of tolerance after every allowed regrasp.
     ToleranceNotReached { regrasps: u32, error: PoseError },
+    /// A search by touch felt no cable at any of its poses, which reached
+    /// `covered_across_mm` either side of the prior's grasp frame.
+    SearchExhausted {
+        search_moves: u32,
+        prior_in_base_mm: [f64; 3],
+        position_sigma_mm: f64,
+        angle_sigma_rad: f64,
+        covered_across_mm: f64,
+    },
 }
 
 impl std::fmt::Display for Failure {
@@ -214,6 +273,18 @@ impl std::fmt::Display for Failure {
                 f,
                 "out of tolerance after {regrasps} regrasp(s): n {:+.3} mm, α {:+.4} rad",
                 error.n_mm, error.alpha_rad
+            ),
+            Failure::SearchExhausted {
+                search_moves,
+                prior_in_base_mm: [x, y, z],
+                position_sigma_mm,
+                angle_sigma_rad,
+                covered_across_mm,
+            } => write!(
+                f,
+                "no cable felt in {search_moves} search move(s) reaching ±{covered_across_mm:.1} mm \
+                 across the prior's grasp frame at ({x:.1}, {y:.1}, {z:.1}) mm \
+                 (σ {position_sigma_mm} mm, {angle_sigma_rad} rad)"
             ),
         }
     }

@@ -37,7 +37,7 @@ fn the_graph_holds_states_superstate_and_transitions() {
     let cluster = &cluster[..cluster.find("  }").unwrap()];
     let [(superstate, children)] = superstates().try_into().expect("one superstate");
     assert_eq!(superstate, Superstate::Grasping {});
-    assert_eq!(children.len(), 7);
+    assert_eq!(children.len(), 8);
     for state in children {
         let state = state.name();
         assert!(
@@ -58,6 +58,18 @@ fn the_graph_holds_states_superstate_and_transitions() {
             "Tactile (within tolerance)",
             State::Done {},
         ),
+        // The search by touch from the task's prior.
+        edge(
+            State::Detect {},
+            "Detected (none), a prior: search",
+            State::Approach {},
+        ),
+        edge(
+            State::Search {},
+            "Grasped (empty), search poses left",
+            State::Search {},
+        ),
+        edge(State::Search {}, "Grasped (holding)", State::Evaluate {}),
         format!(
             "[ltail=cluster_{grasping}, label=\"DeviceFault, Abort (any state of {grasping})\""
         ),
@@ -92,6 +104,33 @@ fn states_the_task_skips_are_drawn_as_skipped() {
     assert!(dot.contains(&format!("{to_regrasp}, style=dashed")));
     let evaluate = State::Evaluate {}.name();
     assert!(dot.contains(&format!("{evaluate} [shape=box, style=rounded]")));
+}
+
+#[test]
+fn a_touch_only_task_skips_the_detector_and_one_without_a_prior_the_search() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
+    let touch_only = dir.path().join("touch-only.toml");
+    std::fs::write(
+        &touch_only,
+        text.replace("# touch_only = true", "touch_only = true"),
+    )
+    .unwrap();
+    let dot = String::from_utf8(graph(&touch_only).stdout).unwrap();
+    let detect = State::Detect {}.name();
+    assert!(
+        dot.contains(&format!("label=\"{detect}\\n(skipped: task.touch_only)\"")),
+        "{dot}"
+    );
+    let prior = text.find("\n# Where the cable roughly lies").unwrap();
+    let no_prior = dir.path().join("no-prior.toml");
+    std::fs::write(&no_prior, &text[..prior]).unwrap();
+    let dot = String::from_utf8(graph(&no_prior).stdout).unwrap();
+    let search = State::Search {}.name();
+    assert!(
+        dot.contains(&format!("label=\"{search}\\n(skipped: no [prior])\"")),
+        "{dot}"
+    );
 }
 
 #[test]

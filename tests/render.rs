@@ -61,6 +61,7 @@ fn plain(width_px: i32, height_px: i32, cables: Vec<CableSpec>) -> SceneSpec {
         light: Light::default(),
         noise_sigma: 0.0,
         blur_sigma_px: 0.0,
+        occluders: Vec::new(),
         marker: None,
     }
 }

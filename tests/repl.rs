@@ -1,6 +1,7 @@
 //! `cablecell repl` driven through a pseudo-terminal, as an operator
 //! would: stepping the whole regrasp task, breakpoints with conditions,
-//! refused commands, Ctrl-C during `continue`, and leaving.
+//! refused commands, Ctrl-C during `continue`, a break in a search by
+//! touch, and leaving.
 
 use std::path::Path;
 
@@ -14,10 +15,15 @@ use rexpect::session::{PtySession, spawn_command};
 /// rad; one regrasp reaches tolerance), with `home` as its home folder
 /// (for the history file).
 fn repl(home: &Path, pace: &str, extra: &[&str]) -> PtySession {
+    repl_on(home, "tasks/regrasp.toml", pace, extra)
+}
+
+/// The same on the task file `task` (named `regrasp` too).
+fn repl_on(home: &Path, task: &str, pace: &str, extra: &[&str]) -> PtySession {
     let cell = common::sim_cell_with_oracle_file(home);
     let mut command = common::command();
     command
-        .args(["repl", "tasks/regrasp.toml", "--seed", "3", "--pace", pace])
+        .args(["repl", task, "--seed", "3", "--pace", pace])
         .args(["--cell", cell.to_str().expect("utf-8")])
         .args(extra)
         .env("HOME", home)
@@ -66,18 +72,8 @@ fn step_through_the_whole_regrasp_task() {
     let home = tempfile::tempdir().unwrap();
     let mut s = repl(home.path(), "0", &["--no-record"]);
     prompt(&mut s, State::Idle {});
-    let states = [
-        State::Prepare {},
-        State::Detect {},
-        State::Approach {},
-        State::TrialGrasp {},
-        State::Evaluate {},
-        State::Regrasp {},
-        State::Verify {},
-        State::Done {},
-    ];
     let mut previous = State::Idle {};
-    for state in states {
+    for state in common::ONE_REGRASP_PATH {
         send(&mut s, "step");
         expect(&mut s, &arrow(previous, state));
         if state != (State::Done {}) {
@@ -211,18 +207,8 @@ fn ctrl_c_during_continue_pauses_at_a_safe_point_and_the_run_goes_on() {
     s.send_control('c').unwrap();
     let (_, paused) = s.exp_regex("paused in [a-z_]+").unwrap();
     let state = State::named(paused.trim_start_matches("paused in ")).expect("a state");
-    assert!(
-        [
-            State::Detect {},
-            State::Approach {},
-            State::TrialGrasp {},
-            State::Evaluate {},
-            State::Regrasp {},
-            State::Verify {},
-        ]
-        .contains(&state),
-        "{paused}"
-    );
+    // Anywhere from detect to verify.
+    assert!(common::ONE_REGRASP_PATH[1..7].contains(&state), "{paused}");
     prompt(&mut s, state);
     send(&mut s, "continue");
     expect(&mut s, "run over in done");
@@ -265,5 +251,56 @@ fn abort_makes_the_cell_safe_and_refuses_what_cannot_be_done() {
     send(&mut s, "load tasks/missing.toml");
     expect(&mut s, "cannot: tasks/missing.toml: cannot read the file");
     prompt(&mut s, State::Fault {});
+    quit(s);
+}
+
+#[test]
+fn break_in_a_search_by_touch_and_step_through_it() {
+    let home = tempfile::tempdir().unwrap();
+    // Touch only, the prior 53 mm above the cable: the ninth pose finds it.
+    let shipped = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
+    let far = shipped
+        .replace("# touch_only = true", "touch_only = true")
+        .replace(
+            "translation_mm = [450.0, 0.0, 255.0]",
+            "translation_mm = [450.0, 0.0, 303.0]",
+        )
+        .replace("position_sigma_mm = 5.0", "position_sigma_mm = 18.0")
+        .replace("max_search_moves = 5", "max_search_moves = 20");
+    let task = home.path().join("far.toml");
+    std::fs::write(&task, far).unwrap();
+    let mut s = repl_on(home.path(), task.to_str().unwrap(), "0", &["--no-record"]);
+    prompt(&mut s, State::Idle {});
+    send(&mut s, "break search if search_moves >= 3");
+    expect(&mut s, "breakpoint 1: search if search_moves >= 3");
+    prompt(&mut s, State::Idle {});
+    send(&mut s, "continue");
+    // The trial grasp at the prior's mean closed on nothing, then the
+    // first search move; the breakpoint fires on the second.
+    expect(&mut s, &arrow(State::TrialGrasp {}, State::Search {}));
+    expect(&mut s, &arrow(State::Search {}, State::Search {}));
+    expect(
+        &mut s,
+        "breakpoint 1 hit on entering search (if search_moves >= 3); \
+         next: release, move to the search's next pose, grasp",
+    );
+    prompt(&mut s, State::Search {});
+    send(&mut s, "values");
+    expect(&mut s, "search_moves = 3.0000");
+    prompt(&mut s, State::Search {});
+    send(&mut s, "delete 1");
+    prompt(&mut s, State::Search {});
+    send(&mut s, "step");
+    expect(&mut s, &arrow(State::Search {}, State::Search {}));
+    expect(&mut s, "in search; next: ");
+    prompt(&mut s, State::Search {});
+    send(&mut s, "continue");
+    expect(&mut s, &arrow(State::Search {}, State::Evaluate {}));
+    expect(&mut s, "run over in done");
+    expect(
+        &mut s,
+        "touch only (the task is touch only): 9 search move(s)",
+    );
+    prompt(&mut s, State::Done {});
     quit(s);
 }

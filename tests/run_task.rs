@@ -90,15 +90,11 @@ fn the_sequence_visits_every_state_in_order() {
     // Seed 3 gives a trial grasp out of tolerance (checked below).
     let record = run(&task, &cell, 3);
     let states: Vec<_> = record.transitions.iter().map(|t| t.to).collect();
-    let sequence = [
-        State::Prepare {},
-        State::Detect {},
-        State::Approach {},
-        State::TrialGrasp {},
-        State::Evaluate {},
-        State::Regrasp {},
-    ];
-    assert_eq!(&states[..6], sequence.map(|s| s.name()));
+    let sequence: Vec<_> = common::ONE_REGRASP_PATH[..6]
+        .iter()
+        .map(|s| s.name())
+        .collect();
+    assert_eq!(&states[..6], sequence.as_slice());
     assert_eq!(states.last(), Some(&State::Done {}.name()));
     assert_eq!(states[states.len() - 2], State::Verify {}.name());
     // Simulated time only moves forward, and motions take time.

@@ -169,6 +169,8 @@ fn calibration_without_the_marker_in_view_fails_clearly() {
 fn a_corrupt_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
     // A missing model is refused with the cell file (tests/bad_input.rs);
     // one that is there but is no network shows only when it is loaded.
+    // The shipped task's [prior] would have the run search by touch
+    // instead (tests/touch_only.rs): this task has none.
     let dir = tempfile::tempdir().expect("tempdir");
     let broken = dir.path().join("broken.onnx");
     std::fs::write(&broken, "not a network").expect("write");
@@ -185,7 +187,25 @@ fn a_corrupt_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
             .collect::<Vec<_>>()
             .join("\n")
     });
-    let report = common::regrasp_fault_report(&path);
+    let shipped = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
+    let prior = shipped
+        .find("\n# Where the cable roughly lies")
+        .expect("a prior");
+    let task = dir.path().join("no-prior.toml");
+    std::fs::write(&task, &shipped[..prior]).expect("write");
+    let out = common::cablecell(&[
+        "run",
+        common::text(&task),
+        "--cell",
+        common::text(&path),
+        "--seed",
+        "1",
+        "--json",
+        "--no-record",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["outcome"]["kind"], "fault");
     assert_eq!(report["outcome"]["state"], "detect");
     let reason = report["outcome"].to_string();
     assert!(reason.contains("broken.onnx"), "{reason}");

@@ -45,6 +45,7 @@ fn scene(background: Background, cables: Vec<CableSpec>) -> SceneSpec {
         light: Light::default(),
         noise_sigma: 2.0,
         blur_sigma_px: 0.5,
+        occluders: Vec::new(),
         marker: None,
     }
 }

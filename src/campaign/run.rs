@@ -11,7 +11,8 @@ use super::trial::{TrialEntry, run_trial};
 use crate::cell::CellFile;
 use crate::cell::load_cell;
 use crate::schema::ConfigError;
-use crate::task::campaign_file::CampaignFile;
+use crate::schema::toml_file::{key_position, read};
+use crate::task::campaign_file::{CampaignFile, Sensing};
 use crate::task::{TaskFile, load_task};
 
 #[derive(Debug, thiserror::Error)]
@@ -64,6 +65,22 @@ impl Campaign {
     pub fn load(path: &Path, overrides: Overrides) -> Result<Self, CampaignError> {
         let file = CampaignFile::load(path)?;
         let task = load_task(&file.task_path(path))?;
+        if let Some(policy) = file.policies.iter().find(|p| p.sensing == Sensing::Touch)
+            && task.prior.is_none()
+        {
+            let (line, column) = key_position(&read(path)?, &["campaign", "task"]);
+            return Err(ConfigError::Invalid {
+                path: path.to_owned(),
+                line,
+                column,
+                field: "campaign.task".to_owned(),
+                message: format!(
+                    "policy `{}` is touch only, but the task has no [prior] to search from",
+                    policy.name
+                ),
+            }
+            .into());
+        }
         let cell = load_cell(&file.cell_path(path))?;
         Ok(Self {
             trials: overrides.trials.unwrap_or(file.campaign.trials),

@@ -23,6 +23,10 @@ pub struct Summary {
     pub median: f64,
     pub p95: f64,
     pub max: f64,
+    /// The mean's 95 % confidence interval, Student's t with n − 1 degrees
+    /// of freedom (the trials' spread estimated from the trials
+    /// themselves); `None` for a single value.
+    pub mean_ci95: Option<[f64; 2]>,
 }
 
 impl Summary {
@@ -62,8 +66,19 @@ impl Summary {
             median: quantile_type7(&sorted, 0.5),
             p95: quantile_type7(&sorted, 0.95),
             max,
+            mean_ci95: mean_ci95(mean, std_dev, count),
         })
     }
+}
+
+/// The 95 % interval of a mean of `count` values with sample standard
+/// deviation `std_dev`: mean ± t₀.₉₇₅,ₙ₋₁ · std_dev / √n.
+fn mean_ci95(mean: f64, std_dev: f64, count: usize) -> Option<[f64; 2]> {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    let degrees = count.checked_sub(1).filter(|&d| d > 0)? as f64;
+    let t = StudentsT::new(0.0, 1.0, degrees).ok()?.inverse_cdf(0.975);
+    let half = t * std_dev / (count as f64).sqrt();
+    Some([mean - half, mean + half])
 }
 
 /// The type-7 quantile of non-empty, ascending `sorted` at `p` in [0, 1].
@@ -132,6 +147,8 @@ mod tests {
         // median: h = 4 · 0.5 = 2 → x₂ = 3
         // p95: h = 4 · 0.95 = 3.8 → x₃ + 0.8 · (x₄ − x₃) = 4 + 0.8 · 6 = 8.8
         // max = 10
+        // 95 % CI of the mean: t₀.₉₇₅,₄ = 2.7764451… (R's qt(0.975, 4)),
+        // 4 ± 2.7764451 · 3.5355339 / √5 = 4 ± 4.3899…
         let s = Summary::of(&[1.0, 2.0, 3.0, 4.0, 10.0]).unwrap();
         assert_eq!(s.count, 5);
         assert_relative_eq!(s.mean, 4.0, epsilon = 1e-12);
@@ -139,6 +156,10 @@ mod tests {
         assert_relative_eq!(s.median, 3.0, epsilon = 1e-12);
         assert_relative_eq!(s.p95, 8.8, epsilon = 1e-12);
         assert_eq!(s.max, 10.0);
+        let [low, high] = s.mean_ci95.expect("an interval for 5 values");
+        let half = 2.776_445_105_2 * 12.5_f64.sqrt() / 5.0_f64.sqrt();
+        assert_relative_eq!(low, 4.0 - half, epsilon = 1e-8);
+        assert_relative_eq!(high, 4.0 + half, epsilon = 1e-8);
     }
 
     #[test]
@@ -163,7 +184,8 @@ mod tests {
                 std_dev: 0.0,
                 median: 2.5,
                 p95: 2.5,
-                max: 2.5
+                max: 2.5,
+                mean_ci95: None,
             }
         );
     }

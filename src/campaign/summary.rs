@@ -26,6 +26,10 @@ pub struct PolicySummary {
     pub success: Option<Rate>,
     pub faults: usize,
     pub regrasps_per_trial: Option<Summary>,
+    /// Grasps a search by touch made per trial, over the trials that
+    /// searched; left out of the JSON when none did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_moves_per_trial: Option<Summary>,
     /// Duration of a trial on the cell's clock (simulated time).
     pub cell_time_per_trial_s: Option<Summary>,
     /// Computation per trial (wall clock, not reproducible).
@@ -112,6 +116,10 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
         .iter()
         .map(|e| e.grasps.len().saturating_sub(1) as f64)
         .collect();
+    let search_moves: Vec<f64> = entries
+        .iter()
+        .filter_map(|e| e.search_moves.map(f64::from))
+        .collect();
     let cell_time: Vec<f64> = entries.iter().map(|e| e.cell_time_s).collect();
     let compute_time: Vec<f64> = entries.iter().map(|e| e.compute_time_s).collect();
     PolicySummary {
@@ -125,6 +133,7 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
             .filter(|e| e.outcome == TrialOutcome::Fault)
             .count(),
         regrasps_per_trial: Summary::of(&regrasps),
+        search_moves_per_trial: Summary::of(&search_moves),
         cell_time_per_trial_s: Summary::of(&cell_time),
         compute_time_per_trial_s: Summary::of(&compute_time),
     }
@@ -132,32 +141,45 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
 
 /// The summary as a table, the policies side by side.
 pub fn render_table(summary: &CampaignSummary) -> String {
-    const LABEL: usize = 24;
-    const CELL: usize = 44;
-    let mut out = format!(
-        "campaign {}: {} trials per policy, seed {}\n{:LABEL$}",
-        summary.name, summary.trials, summary.seed, ""
+    let header = format!(
+        "campaign {}: {} trials per policy, seed {}\n",
+        summary.name, summary.trials, summary.seed
     );
-    for policy in &summary.policies {
+    let blocks: Vec<String> = summary
+        .policies
+        .chunks(POLICIES_PER_BLOCK)
+        .map(render_block)
+        .collect();
+    header + &blocks.join("\n")
+}
+
+/// How many policies stand side by side before the table goes on below.
+const POLICIES_PER_BLOCK: usize = 3;
+
+/// The table's rows for `policies`, side by side.
+fn render_block(policies: &[PolicySummary]) -> String {
+    const LABEL: usize = 24;
+    const CELL: usize = 60;
+    let mut out = format!("{:LABEL$}", "");
+    for policy in policies {
         out += &format!(
             "{:<CELL$}",
             format!("{} ({} trials)", policy.policy, policy.trials)
         );
     }
     out += &format!("\n{:LABEL$}", "");
-    for _ in &summary.policies {
-        out += &format!("{:<CELL$}", "mean ± sd   (median, p95, max)");
+    for _ in policies {
+        out += &format!("{:<CELL$}", "mean [95 % CI] ± sd (median, p95, max)");
     }
     out.push('\n');
     let mut row = |label: String, cell: &dyn Fn(&PolicySummary) -> String| {
         out += &format!("{label:<LABEL$}");
-        for policy in &summary.policies {
+        for policy in policies {
             out += &format!("{:<CELL$}", cell(policy));
         }
         out.push('\n');
     };
-    let stage_names: Vec<String> = summary
-        .policies
+    let stage_names: Vec<String> = policies
         .iter()
         .max_by_key(|p| p.stages.len())
         .map(|p| p.stages.iter().map(|s| s.stage.clone()).collect())
@@ -192,6 +214,11 @@ pub fn render_table(summary: &CampaignSummary) -> String {
     row("regrasps per trial".into(), &|p| {
         cell(p.regrasps_per_trial, 1.0, 2)
     });
+    if policies.iter().any(|p| p.search_moves_per_trial.is_some()) {
+        row("search moves per trial".into(), &|p| {
+            cell(p.search_moves_per_trial, 1.0, 2)
+        });
+    }
     row("cell time per trial s".into(), &|p| {
         cell(p.cell_time_per_trial_s, 1.0, 2)
     });
@@ -204,8 +231,14 @@ pub fn render_table(summary: &CampaignSummary) -> String {
 fn cell(summary: Option<Summary>, scale: f64, digits: usize) -> String {
     match summary {
         Some(s) => format!(
-            "{:.d$} ± {:.d$} ({:.d$}, {:.d$}, {:.d$})",
+            "{:.d$} {} ± {:.d$} ({:.d$}, {:.d$}, {:.d$})",
             s.mean * scale,
+            s.mean_ci95.map_or("[—]".to_owned(), |[low, high]| format!(
+                "[{:.d$}, {:.d$}]",
+                low * scale,
+                high * scale,
+                d = digits
+            )),
             s.std_dev * scale,
             s.median * scale,
             s.p95 * scale,
@@ -253,6 +286,7 @@ mod tests {
             cell_time_s: 4.0 + trial as f64,
             compute_time_s: 0.001,
             recording: None,
+            search_moves: None,
         }
     }
 
@@ -305,7 +339,10 @@ mod tests {
         assert!(q.success.is_none());
         let table = render_table(&summary);
         assert!(
-            table.contains("trial grasp |n| mm      3.000 ± 2.646 (2.000, 5.600, 6.000)"),
+            // t₀.₉₇₅,₂ = 4.3027: 3 ± 4.3027 · 2.646 / √3 = 3 ± 6.572.
+            table.contains(
+                "trial grasp |n| mm      3.000 [-3.572, 9.572] ± 2.646 (2.000, 5.600, 6.000)"
+            ),
             "{table}"
         );
         assert!(table.contains("2/3 = 67 %"), "{table}");

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
@@ -11,12 +12,14 @@ use crate::cell::CellFile;
 use crate::detector::config::{DetectorBackend, OracleConfig};
 use crate::geometry::{LineInSensor, PoseError};
 use crate::hw::arm::config::ArmBackend;
+use crate::hw::camera::config::{CameraBackend, OcclusionConfig};
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
 use crate::record::RunOutcome;
+use crate::schema::FrameConfig;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
-use crate::task::campaign_file::{ErrorSource, Perturbations, Policy};
+use crate::task::campaign_file::{ErrorSource, Perturbations, Policy, Sensing, TrialStart};
 
 /// The seed of trial `index`: the same for every policy, and independent
 /// of the order and the thread the trials run in.
@@ -59,22 +62,38 @@ impl Perturbation {
     }
 
     /// The cell of this trial: the base cell with these values set.
-    pub fn apply(&self, cell: &CellFile) -> CellFile {
+    pub fn apply(&self, cell: &CellFile, start: TrialStart) -> CellFile {
         let mut cell = cell.clone();
         // The paper's experiment starts each trial from a chosen offset: an
         // oracle detector sets it, whatever detector the cell has.
-        cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
-            position_noise_mm: 0.0,
-            angle_noise_rad: 0.0,
-            offset_across_mm: self.start_offset_mm,
-            offset_angle_rad: self.start_angle_rad,
-        });
+        if start == TrialStart::Oracle {
+            cell.detector.backend = DetectorBackend::Oracle(OracleConfig {
+                position_noise_mm: 0.0,
+                angle_noise_rad: 0.0,
+                offset_across_mm: self.start_offset_mm,
+                offset_angle_rad: self.start_angle_rad,
+            });
+        }
         if let Some(tactile) = cell.tactile.backend.sim_pad_mut() {
             tactile.noise_fraction = self.sensor_noise_fraction;
         }
         cell.world.cable_diameter_mm = self.cable_diameter_mm;
         cell.world.bending_stiffness_n_mm2 = self.cable_stiffness_n_mm2;
         cell
+    }
+
+    /// A touch-only trial starts from its prior as the others start from
+    /// the oracle's detection: its mean is the true grasp frame moved by
+    /// this trial's start offset and angle.
+    fn place_prior(&self, task: &mut TaskFile, cell: &CellFile) {
+        if let Some(prior) = &mut task.prior {
+            let cable_from_start = Isometry3::from_parts(
+                Translation3::new(0.0, self.start_offset_mm, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), self.start_angle_rad),
+            );
+            prior.base_from_cable =
+                FrameConfig::from_isometry(&(cell.world.base_from_cable() * cable_from_start));
+        }
     }
 }
 
@@ -101,6 +120,10 @@ pub struct TrialEntry {
     /// campaign's recordings folder (so the output folder can move).
     #[serde(default)]
     pub recording: Option<String>,
+    /// Grasps a search by touch made, when the trial searched (`grasps`
+    /// then begins at the first that felt the cable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_moves: Option<u32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -121,9 +144,23 @@ pub struct GraspResult {
     pub estimate_error: Option<PoseError>,
 }
 
-/// The task and cell as `policy` runs them.
-fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile, CellFile) {
-    let (mut task, mut cell) = (task.clone(), cell.clone());
+/// The task and cell of a trial with `perturbation` as `policy` runs them.
+fn apply_policy(
+    policy: &Policy,
+    perturbation: &Perturbation,
+    start: TrialStart,
+    task: &TaskFile,
+    cell: &CellFile,
+) -> (TaskFile, CellFile) {
+    let (mut task, mut cell) = (task.clone(), perturbation.apply(cell, start));
+    match policy.sensing {
+        Sensing::Both => {}
+        Sensing::Vision => task.prior = None,
+        Sensing::Touch => {
+            task.task.touch_only = true;
+            perturbation.place_prior(&mut task, &cell);
+        }
+    }
     task.tactile.estimator = policy.estimator;
     task.regrasp.max_regrasps = policy.max_regrasps;
     if let Some(tolerance) = policy.tolerance {
@@ -149,6 +186,15 @@ fn apply_policy(policy: &Policy, task: &TaskFile, cell: &CellFile) -> (TaskFile,
             ErrorSource::SpringBack => cell.world.spring_back_fraction = 0.0,
         }
     }
+    // Only a simulated camera has a board to lay over the cable.
+    if let Some(fraction) = policy.occlusion_fraction
+        && let CameraBackend::Sim(camera) = &mut cell.camera.backend
+    {
+        camera
+            .occlusion
+            .get_or_insert_with(OcclusionConfig::default)
+            .hidden_fraction = fraction;
+    }
     (task, cell)
 }
 
@@ -172,7 +218,7 @@ pub fn run_trial(
     let started = Instant::now();
     let seed = trial_seed(campaign_seed, index);
     let perturbation = Perturbation::draw(ranges, seed);
-    let (task, cell) = apply_policy(policy, task, &perturbation.apply(cell));
+    let (task, cell) = apply_policy(policy, &perturbation, ranges.start, task, cell);
     let mut runner = match Runner::for_task(&task, &cell, seed) {
         Ok(runner) => runner,
         Err(error) => {
@@ -189,6 +235,7 @@ pub fn run_trial(
                 cell_time_s: 0.0,
                 compute_time_s: started.elapsed().as_secs_f64(),
                 recording: None,
+                search_moves: None,
             };
         }
     };
@@ -248,5 +295,121 @@ pub fn run_trial(
         cell_time_s: record.transitions.last().map_or(0.0, |t| t.t_s),
         compute_time_s: started.elapsed().as_secs_f64(),
         recording,
+        search_moves: record.touch_only.as_ref().map(|t| t.search_moves),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::cell::load_cell;
+    use crate::hw::camera::config::SimCameraConfig;
+    use crate::task::load_task;
+
+    fn shipped() -> (TaskFile, CellFile) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let task = load_task(&root.join("tasks/regrasp.toml")).expect("the shipped task");
+        let cell = load_cell(&root.join("config/cell.sim.toml")).expect("the shipped cell");
+        (task, cell)
+    }
+
+    fn policy(extra: &str) -> Policy {
+        toml::from_str(&format!(
+            "name = \"p\"\nestimator = \"ridge\"\nmax_regrasps = 1\n{extra}"
+        ))
+        .expect("a policy")
+    }
+
+    /// A trial 2 mm and 0.1 rad off at the start.
+    fn perturbation() -> Perturbation {
+        Perturbation {
+            start_offset_mm: 2.0,
+            start_angle_rad: 0.1,
+            cable_diameter_mm: 2.5,
+            cable_stiffness_n_mm2: 60.0,
+            sensor_noise_fraction: 0.02,
+        }
+    }
+
+    #[test]
+    fn a_policy_s_sensing_keeps_drops_or_forces_the_search_by_touch() {
+        let (task, cell) = shipped();
+        assert!(task.prior.is_some() && !task.task.touch_only);
+        let trial = |sensing: &str| {
+            let policy = policy(&format!("sensing = \"{sensing}\""));
+            apply_policy(&policy, &perturbation(), TrialStart::Oracle, &task, &cell).0
+        };
+        let both = trial("both");
+        assert!(both.prior.is_some() && !both.task.touch_only);
+        assert!(trial("vision").prior.is_none());
+        let touch = trial("touch");
+        assert!(touch.task.touch_only);
+        let moved = touch.prior.expect("a prior").base_from_cable;
+        assert_ne!(
+            moved.translation_mm,
+            task.prior.as_ref().unwrap().base_from_cable.translation_mm
+        );
+    }
+
+    #[test]
+    fn a_trial_starts_from_the_oracle_unless_the_campaign_keeps_the_cells_detector() {
+        let (_, cell) = shipped();
+        assert!(matches!(cell.detector.backend, DetectorBackend::Vision(_)));
+        let perturbation = Perturbation {
+            start_offset_mm: 2.0,
+            start_angle_rad: 0.1,
+            cable_diameter_mm: 2.5,
+            cable_stiffness_n_mm2: 60.0,
+            sensor_noise_fraction: 0.02,
+        };
+        match perturbation
+            .apply(&cell, TrialStart::Oracle)
+            .detector
+            .backend
+        {
+            DetectorBackend::Oracle(oracle) => {
+                assert_eq!(
+                    (oracle.offset_across_mm, oracle.offset_angle_rad),
+                    (2.0, 0.1)
+                )
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            perturbation
+                .apply(&cell, TrialStart::Detector)
+                .detector
+                .backend,
+            DetectorBackend::Vision(_)
+        ));
+    }
+
+    fn camera(cell: &CellFile) -> &SimCameraConfig {
+        match &cell.camera.backend {
+            CameraBackend::Sim(sim) => sim,
+            CameraBackend::Opencv(_) => panic!("the shipped cell's camera is simulated"),
+        }
+    }
+
+    #[test]
+    fn a_policy_s_occlusion_reaches_its_trials_cell_at_the_same_place_for_every_policy() {
+        let (task, cell) = shipped();
+        let oracle = TrialStart::Oracle;
+        let (_, untouched) = apply_policy(&policy(""), &perturbation(), oracle, &task, &cell);
+        assert!(camera(&untouched).occlusion.is_none());
+
+        let seed = trial_seed(1, 3);
+        let position = |fraction: f64| {
+            let policy = policy(&format!("occlusion_fraction = {fraction}"));
+            let (_, cell) = apply_policy(&policy, &perturbation(), oracle, &task, &cell);
+            let camera = camera(&cell);
+            let occlusion = camera.occlusion.as_ref().expect("an occlusion table");
+            assert_eq!(occlusion.hidden_fraction, fraction);
+            let appearance = camera.appearance(&mut rng(seed, Stream::Camera));
+            appearance.occlusion.board.expect("a board").position
+        };
+        assert_eq!(position(0.4), position(0.7));
     }
 }

@@ -189,14 +189,18 @@ impl CellDevices {
         };
         let camera_config = &file.camera;
         let camera: Box<dyn Camera> = match &camera_config.backend {
-            CameraBackend::Sim(sim) => Box::new(SimCamera::new(
-                world.clone(),
-                camera_config.intrinsics,
-                sim.base_from_camera.isometry(),
-                camera_config.marker.on_finger(),
-                sim.appearance(),
-                rng(seed, Stream::Camera),
-            )),
+            CameraBackend::Sim(sim) => {
+                let mut stream = rng(seed, Stream::Camera);
+                let appearance = sim.appearance(&mut stream);
+                Box::new(SimCamera::new(
+                    world.clone(),
+                    camera_config.intrinsics,
+                    sim.base_from_camera.isometry(),
+                    camera_config.marker.on_finger(),
+                    appearance,
+                    stream,
+                ))
+            }
             CameraBackend::Opencv(opencv) => Box::new(OpencvCamera::new(
                 opencv.source.clone(),
                 camera_config.intrinsics,

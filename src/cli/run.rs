@@ -127,17 +127,35 @@ pub(super) fn outcome_status(record: &RunRecord) -> Status {
     }
 }
 
-/// Prints what a run added to its record since the last call: grasps,
-/// then transitions with the time spent in the state left.
+/// Prints what a run added to its record since the last call: a search
+/// by touch and its misses, grasps, then transitions with the time spent
+/// in the state left.
 #[derive(Debug, Default)]
 pub(super) struct Commentary {
     transitions: usize,
     grasps: usize,
+    /// `Some(misses printed)` once the search by touch is announced.
+    misses: Option<usize>,
 }
 
 impl Commentary {
     pub(super) fn print_new(&mut self, record: &RunRecord) {
-        record.grasps[self.grasps..].iter().for_each(print_grasp);
+        if let Some(touch_only) = &record.touch_only {
+            let printed = self.misses.unwrap_or_else(|| {
+                println!(
+                    "vision not used ({}): searching by touch from the prior",
+                    touch_only.why
+                );
+                0
+            });
+            for miss in &touch_only.misses[printed..] {
+                print_grasp("search miss", miss);
+            }
+            self.misses = Some(touch_only.misses.len());
+        }
+        for grasp in &record.grasps[self.grasps..] {
+            print_grasp(&attempt_name(grasp.attempt), grasp);
+        }
         self.grasps = record.grasps.len();
         for (i, t) in record.transitions.iter().enumerate().skip(self.transitions) {
             print_transition(record, i, t);
@@ -160,11 +178,15 @@ pub(super) fn print_timeline_line(t_s: f64, from: &str, to: &str, entered_s: f64
     );
 }
 
-pub(super) fn print_grasp(grasp: &GraspRecord) {
-    let name = match grasp.attempt {
-        0 => "trial grasp".to_owned(),
+/// The trial grasp (0) or regrasp k.
+pub(super) fn attempt_name(attempt: u32) -> String {
+    match attempt {
+        0 => "trial grasp".into(),
         k => format!("regrasp {k}"),
-    };
+    }
+}
+
+fn print_grasp(name: &str, grasp: &GraspRecord) {
     match (&grasp.fit, &grasp.estimated_error) {
         (Some(fit), Some(error)) => println!(
             "{name:>13}  estimate n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
@@ -188,6 +210,12 @@ pub(super) fn print_grasp(grasp: &GraspRecord) {
 
 pub(super) fn print_outcome(record: &RunRecord) {
     let tolerance = &record.tolerance;
+    if let Some(touch_only) = &record.touch_only {
+        println!(
+            "touch only ({}): {} search move(s)",
+            touch_only.why, touch_only.search_moves
+        );
+    }
     match &record.outcome {
         Some(RunOutcome::Success { regrasps }) => println!(
             "success: within tolerance (|n| ≤ {} mm, |α| ≤ {} rad) after {regrasps} regrasp(s)",

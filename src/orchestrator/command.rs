@@ -40,6 +40,15 @@ pub enum Command {
         retreat_mm: f64,
         grip_current_a: f64,
     },
+    /// As `Regrasp`, to the next pose of a search by touch. Answered by
+    /// `Grasped`.
+    Probe {
+        base_from_tcp: Isometry3<f64>,
+        speed_mm_s: f64,
+        open_mm: f64,
+        retreat_mm: f64,
+        grip_current_a: f64,
+    },
     /// Stop the arm and the jaws, then open the jaws. Answered by `Stopped`.
     SafeStop { open_mm: f64 },
 }

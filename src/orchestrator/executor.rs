@@ -39,6 +39,13 @@ pub fn execute(cell: &mut CellDevices, command: &Command) -> Event {
             open_mm,
             retreat_mm,
             grip_current_a,
+        }
+        | Command::Probe {
+            base_from_tcp,
+            speed_mm_s,
+            open_mm,
+            retreat_mm,
+            grip_current_a,
         } => regrasp(
             cell,
             base_from_tcp,
@@ -84,7 +91,7 @@ fn grasp(
 }
 
 /// Release, back off along the approach axis, move over the corrected
-/// pose, and grasp again.
+/// pose (or the search's next one), and grasp again.
 fn regrasp(
     cell: &mut CellDevices,
     base_from_tcp: &Isometry3<f64>,

@@ -9,7 +9,7 @@ use super::machine::{State, Superstate};
 use crate::task::TaskFile;
 
 /// Every transition a state makes: (from, event and condition, to).
-pub const TRANSITIONS: [(State, &str, State); 18] = [
+pub const TRANSITIONS: [(State, &str, State); 26] = [
     (State::Idle {}, "Start", State::Prepare {}),
     (
         State::Prepare {},
@@ -18,10 +18,25 @@ pub const TRANSITIONS: [(State, &str, State); 18] = [
     ),
     (
         State::Prepare {},
+        "Tactile (bias measured, touch only)",
+        State::Approach {},
+    ),
+    (
+        State::Prepare {},
         "Tactile (too few frames)",
         State::Fault {},
     ),
     (State::Detect {}, "Detected (a cable)", State::Approach {}),
+    (
+        State::Detect {},
+        "Detected (none), a prior: search",
+        State::Approach {},
+    ),
+    (
+        State::Detect {},
+        "DeviceFault (detector unusable), a prior: search",
+        State::Approach {},
+    ),
     (State::Detect {}, "Detected (none)", State::Failed {}),
     (State::Approach {}, "Arrived", State::TrialGrasp {}),
     (
@@ -29,7 +44,23 @@ pub const TRANSITIONS: [(State, &str, State); 18] = [
         "Grasped (holding)",
         State::Evaluate {},
     ),
+    (
+        State::TrialGrasp {},
+        "Grasped (empty), search poses left",
+        State::Search {},
+    ),
     (State::TrialGrasp {}, "Grasped (empty)", State::Failed {}),
+    (State::Search {}, "Grasped (holding)", State::Evaluate {}),
+    (
+        State::Search {},
+        "Grasped (empty), search poses left",
+        State::Search {},
+    ),
+    (
+        State::Search {},
+        "Grasped (empty), no search pose left",
+        State::Failed {},
+    ),
     (
         State::Evaluate {},
         "Tactile (within tolerance)",
@@ -42,7 +73,12 @@ pub const TRANSITIONS: [(State, &str, State); 18] = [
     ),
     (
         State::Evaluate {},
-        "Tactile (no contact, fit failed, no regrasp left)",
+        "Tactile (nothing felt, search poses left)",
+        State::Search {},
+    ),
+    (
+        State::Evaluate {},
+        "Tactile (no contact, fit failed, no regrasp or search pose left)",
         State::Failed {},
     ),
     (State::Evaluate {}, "Tactile (no frames)", State::Fault {}),
@@ -91,15 +127,19 @@ pub fn superstates() -> Vec<(Superstate, Vec<State>)> {
 
 /// The states `task` never enters, each with the reason.
 pub fn skipped_states(task: &TaskFile) -> Vec<(State, String)> {
+    let mut skipped = Vec::new();
+    if task.task.touch_only {
+        skipped.push((State::Detect {}, "skipped: task.touch_only".to_owned()));
+    }
+    if task.prior.is_none() {
+        skipped.push((State::Search {}, "skipped: no [prior]".to_owned()));
+    }
     if task.regrasp.max_regrasps == 0 {
         let reason = "skipped: regrasp.max_regrasps = 0".to_owned();
-        vec![
-            (State::Regrasp {}, reason.clone()),
-            (State::Verify {}, reason),
-        ]
-    } else {
-        Vec::new()
+        skipped.push((State::Regrasp {}, reason.clone()));
+        skipped.push((State::Verify {}, reason));
     }
+    skipped
 }
 
 /// The machine as a DOT digraph, the states `task` skips drawn dashed and
@@ -240,6 +280,46 @@ mod tests {
         let drawn = dot(&task);
         for state in State::NAMES {
             assert!(drawn.contains(&format!("  {state} [")), "{state} missing");
+        }
+    }
+
+    #[test]
+    fn the_searches_transitions_are_drawn() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let shipped = load_task(&root.join("tasks/regrasp.toml")).unwrap();
+        let mut seen = std::collections::BTreeSet::new();
+        let mut run = |task: &TaskFile, cell: &crate::cell::CellFile, seed: u64| {
+            let mut runner = Runner::for_task(task, cell, seed).unwrap();
+            runner.run_to_end().unwrap();
+            assert_drawn(&runner);
+            seen.extend(runner.record().transitions.iter().map(|t| (t.from, t.to)));
+        };
+        // Touch only, the prior 53 mm (three pads) above the cable, then
+        // 100 mm above it, where the search cannot reach it.
+        let mut task = shipped.clone();
+        task.task.touch_only = true;
+        let cell = crate::orchestrator::test_cell::sim_cell_with_oracle();
+        for (z_mm, sigma_mm) in [(303.0, 18.0), (350.0, 10.0)] {
+            let prior = task.prior.as_mut().expect("the shipped task has a prior");
+            prior.base_from_cable.translation_mm[2] = z_mm;
+            prior.position_sigma_mm = sigma_mm;
+            prior.max_search_moves = 20;
+            run(&task, &cell, 1);
+        }
+        // The vision detector with an uncalibrated camera cannot look.
+        let mut cell = crate::cell::load_cell(&root.join("config/cell.sim.toml")).unwrap();
+        cell.camera.calibration = None;
+        run(&shipped, &cell, 1);
+        for (from, to) in [
+            (State::Prepare {}, State::Approach {}),
+            (State::Detect {}, State::Approach {}),
+            (State::TrialGrasp {}, State::Search {}),
+            (State::Search {}, State::Search {}),
+            (State::Search {}, State::Evaluate {}),
+            (State::Search {}, State::Failed {}),
+        ] {
+            let pair = (from.name(), to.name());
+            assert!(seen.contains(&pair), "{pair:?} never happened");
         }
     }
 }

@@ -3,6 +3,7 @@
 //! ```text
 //! idle ─Start─▶ ┌ grasping ─────────────────────────────────────────────┐
 //!               │ prepare ─▶ detect ─▶ approach ─▶ trial_grasp ─▶ evaluate │──▶ done
+//!               │    └─── touch only ───▶▲              └─▶ search ◀─▶┘  │
 //!               │                                   regrasp ◀─┘  ▲  │    │──▶ failed
 //!               │                                      └─▶ verify ┘──┘    │
 //!               └───── DeviceFault, Abort ──────────────────────────▶ fault
@@ -14,6 +15,13 @@
 //! shares: a device fault or an abort leads to `fault`, whose command makes
 //! the cell safe. Every transition is logged once, by `after_transition`,
 //! into the run record.
+//!
+//! When the camera cannot place the cable (no cable detected, the detector
+//! unusable, or a touch-only task) and the task has a prior, the run
+//! searches by touch: the trial grasp goes to the prior's mean, and while
+//! no grasp has felt the cable, `search` moves to the next pose of
+//! `perception::tactile::search` and grasps again. The first grasp that
+//! feels the cable is the trial grasp, judged as any other.
 
 use nalgebra::{Isometry3, Translation3};
 use statig::prelude::*;
@@ -23,8 +31,13 @@ use super::plan::Plan;
 use crate::geometry::{LineInSensor, planar_to_spatial, t_corr_with_gain};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
+use crate::hw::{DeviceError, DeviceKind};
+use crate::perception::tactile::search::{Prior, SearchPose, covered_half_width_mm, search_poses};
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
-use crate::record::{Failure, GraspRecord, RunOutcome, RunRecord, TransitionRecord, Truth};
+use crate::record::{
+    Failure, GraspRecord, RunOutcome, RunRecord, TouchOnlyRecord, TransitionRecord, Truth,
+    WhyTouchOnly,
+};
 
 /// What the machine shares with the runner: lent to the machine for each
 /// event, owned by the runner in between, so that the runner can change
@@ -61,6 +74,9 @@ pub struct GraspTask {
     /// The arm's measured pose at the latest grasp.
     base_from_tcp_grasped: Isometry3<f64>,
     regrasps_done: u32,
+    /// The search by touch under way, from its start until a grasp feels
+    /// the cable.
+    searching: Option<Search>,
 }
 
 impl GraspTask {
@@ -70,8 +86,17 @@ impl GraspTask {
             base_from_tcp_aim: Isometry3::identity(),
             base_from_tcp_grasped: Isometry3::identity(),
             regrasps_done: 0,
+            searching: None,
         }
     }
+}
+
+/// A search by touch: where it started, the poses it tries in order, and
+/// how many it has aimed at.
+struct Search {
+    prior: Prior,
+    poses: Vec<SearchPose>,
+    made: u32,
 }
 
 impl Default for GraspTask {
@@ -105,7 +130,10 @@ impl GraspTask {
                 match frames.iter().find_map(|frame| estimator.push(&frame.raw)) {
                     Some(bias) => {
                         self.bias = Some(bias);
-                        Transition(State::detect())
+                        match context.plan.prior.filter(|_| context.plan.touch_only) {
+                            Some(prior) => self.start_search(context, prior, WhyTouchOnly::Forced),
+                            None => Transition(State::detect()),
+                        }
                     }
                     None => {
                         let needed = context.plan.bias_frames;
@@ -118,21 +146,28 @@ impl GraspTask {
         }
     }
 
-    /// Detected (a cable) → approach; Detected (none) → failed.
+    /// Detected (a cable) → approach; Detected (none) → approach the
+    /// prior's mean, searching, or failed without a prior; an unusable
+    /// detector → the same with a prior, else fault.
     #[state(superstate = "grasping", entry_action = "enter_detect")]
     fn detect(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Detected(detections) => match detections.cables.first() {
-                Some(detection) => {
-                    // Aim so that the cable lands on the target pose.
-                    let sensor_from_cable =
-                        planar_to_spatial(&context.plan.target.sensor_from_line());
-                    self.base_from_tcp_aim = detection.base_from_cable
-                        * sensor_from_cable.inverse()
-                        * context.plan.tcp_from_sensor.inverse();
+            Event::Detected(detections) => match (detections.cables.first(), context.plan.prior) {
+                (Some(detection), _) => {
+                    self.base_from_tcp_aim = aim_at(&context.plan, &detection.base_from_cable);
                     Transition(State::approach())
                 }
-                None => fail(context, Failure::NothingDetected),
+                (None, Some(prior)) => {
+                    self.start_search(context, prior, WhyTouchOnly::NoCableDetected)
+                }
+                (None, None) => fail(context, Failure::NothingDetected),
+            },
+            Event::DeviceFault(error) if vision_unusable(error) => match context.plan.prior {
+                Some(prior) => {
+                    let error = error.to_string();
+                    self.start_search(context, prior, WhyTouchOnly::DetectorUnusable { error })
+                }
+                None => Super,
             },
             _ => Super,
         }
@@ -147,19 +182,22 @@ impl GraspTask {
         }
     }
 
-    /// Grasped (holding) → evaluate; Grasped (empty) → failed.
+    /// Grasped (holding) → evaluate; Grasped (empty) → search (poses
+    /// left), or failed.
     #[state(superstate = "grasping", entry_action = "enter_trial_grasp")]
     fn trial_grasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
-        match event {
-            Event::Grasped {
-                base_from_tcp,
-                grip,
-            } => self.on_grasped(context, base_from_tcp, grip, State::evaluate()),
-            _ => Super,
-        }
+        self.on_grasped(context, event, State::evaluate())
     }
 
-    /// Tactile → done (within tolerance), regrasp, or failed.
+    /// Grasped (holding) → evaluate; Grasped (empty) → search again (poses
+    /// left), or failed.
+    #[state(superstate = "grasping", entry_action = "enter_search")]
+    fn search(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
+        self.on_grasped(context, event, State::evaluate())
+    }
+
+    /// Tactile → done (within tolerance), regrasp, search (nothing felt,
+    /// poses left), or failed.
     #[state(superstate = "grasping", entry_action = "enter_read_tactile")]
     fn evaluate(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
@@ -171,13 +209,7 @@ impl GraspTask {
     /// Grasped (holding) → verify; Grasped (empty) → failed.
     #[state(superstate = "grasping", entry_action = "enter_regrasp")]
     fn regrasp(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
-        match event {
-            Event::Grasped {
-                base_from_tcp,
-                grip,
-            } => self.on_grasped(context, base_from_tcp, grip, State::verify()),
-            _ => Super,
-        }
+        self.on_grasped(context, event, State::verify())
     }
 
     /// Tactile → done (within tolerance), regrasp, or failed.
@@ -253,6 +285,19 @@ impl GraspTask {
     }
 
     #[action]
+    fn enter_search(&mut self, context: &mut Context) {
+        if self.aim_search(context) {
+            context.command = Some(Command::Probe {
+                base_from_tcp: self.base_from_tcp_aim,
+                speed_mm_s: context.plan.speed_mm_s,
+                open_mm: context.plan.open_mm,
+                retreat_mm: context.plan.retreat_mm,
+                grip_current_a: context.plan.grip_current_a,
+            });
+        }
+    }
+
+    #[action]
     fn enter_read_tactile(&mut self, context: &mut Context) {
         context.command = Some(Command::ReadTactile {
             frames: context.plan.average_frames,
@@ -279,6 +324,48 @@ impl GraspTask {
     }
 }
 
+/// Whether `error` says that the camera cannot place the cable, and
+/// nothing worse: the detector or camera cannot work as set up, the
+/// pipeline failed on the image, or the image could not be read.
+fn vision_unusable(error: &DeviceError) -> bool {
+    matches!(
+        error,
+        DeviceError::Unusable {
+            device: DeviceKind::Detector | DeviceKind::Camera,
+            ..
+        } | DeviceError::Vision { .. }
+            | DeviceError::Image { .. }
+    )
+}
+
+/// The TCP's pose that puts the cable of grasp frame `base_from_cable` at
+/// the plan's target pose on the pad.
+fn aim_at(plan: &Plan, base_from_cable: &Isometry3<f64>) -> Isometry3<f64> {
+    let sensor_from_cable = planar_to_spatial(&plan.target.sensor_from_line());
+    base_from_cable * sensor_from_cable.inverse() * plan.tcp_from_sensor.inverse()
+}
+
+impl Search {
+    /// After a grasp that felt nothing: the next pose, or failed when none
+    /// is left.
+    fn next(&self, context: &mut Context) -> Outcome<State> {
+        if (self.made as usize) < self.poses.len() {
+            return Transition(State::search());
+        }
+        let prior = &self.prior;
+        fail(
+            context,
+            Failure::SearchExhausted {
+                search_moves: self.made,
+                prior_in_base_mm: prior.base_from_cable.translation.vector.into(),
+                position_sigma_mm: prior.position_sigma_mm,
+                angle_sigma_rad: prior.angle_sigma_rad,
+                covered_across_mm: covered_half_width_mm(&self.poses, context.plan.fit.pitch_mm),
+            },
+        )
+    }
+}
+
 /// The pose `standoff_mm` back from `base_from_tcp` along the approach
 /// axis (the TCP's z).
 fn standoff_from(base_from_tcp: &Isometry3<f64>, standoff_mm: f64) -> Isometry3<f64> {
@@ -286,24 +373,71 @@ fn standoff_from(base_from_tcp: &Isometry3<f64>, standoff_mm: f64) -> Isometry3<
 }
 
 impl GraspTask {
-    fn on_grasped(
+    /// Starts a search by touch from `prior`: the trial grasp goes to its
+    /// first pose, the prior's mean.
+    fn start_search(
         &mut self,
         context: &mut Context,
-        base_from_tcp: &Isometry3<f64>,
-        grip: &GripOutcome,
-        next: State,
+        prior: Prior,
+        why: WhyTouchOnly,
     ) -> Outcome<State> {
+        context.record.touch_only = Some(TouchOnlyRecord {
+            why,
+            search_moves: 0,
+            misses: Vec::new(),
+        });
+        let poses = search_poses(&prior, context.plan.fit.pitch_mm);
+        self.searching = Some(Search {
+            prior,
+            poses,
+            made: 0,
+        });
+        // A search has at least one pose, the prior's mean.
+        self.aim_search(context);
+        Transition(State::approach())
+    }
+
+    /// Aims at the search's next pose and counts the move; `false` if no
+    /// search is under way or it has no pose left.
+    fn aim_search(&mut self, context: &mut Context) -> bool {
+        let Some(search) = &mut self.searching else {
+            return false;
+        };
+        let Some(pose) = search.poses.get(search.made as usize) else {
+            return false;
+        };
+        self.base_from_tcp_aim = aim_at(&context.plan, &pose.base_from_cable(&search.prior));
+        search.made += 1;
+        if let Some(touch_only) = &mut context.record.touch_only {
+            touch_only.search_moves = search.made;
+        }
+        true
+    }
+
+    /// Grasped (holding) → `next`; Grasped (empty) → the search's next
+    /// pose, or failed; any other event → the superstate.
+    fn on_grasped(&mut self, context: &mut Context, event: &Event, next: State) -> Outcome<State> {
+        let Event::Grasped {
+            base_from_tcp,
+            grip,
+        } = event
+        else {
+            return Super;
+        };
         match grip {
             GripOutcome::Holding { .. } => {
                 self.base_from_tcp_grasped = *base_from_tcp;
                 Transition(next)
             }
-            GripOutcome::Empty => fail(
-                context,
-                Failure::GraspedNothing {
-                    attempt: self.regrasps_done,
-                },
-            ),
+            GripOutcome::Empty => match &self.searching {
+                Some(search) => search.next(context),
+                None => fail(
+                    context,
+                    Failure::GraspedNothing {
+                        attempt: self.regrasps_done,
+                    },
+                ),
+            },
         }
     }
 
@@ -326,7 +460,7 @@ impl GraspTask {
             .as_ref()
             .ok()
             .map(|fit| fit.line().error_to(&context.plan.target));
-        context.record.grasps.push(GraspRecord {
+        let grasp = GraspRecord {
             attempt,
             t_s: context.now_s,
             base_from_tcp: self.base_from_tcp_grasped,
@@ -339,7 +473,16 @@ impl GraspTask {
                 estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
             }),
             shapes: None,
-        });
+        };
+        if let (Some(search), Err(FitError::NoContact { .. })) = (&self.searching, &fit) {
+            if let Some(touch_only) = &mut context.record.touch_only {
+                touch_only.misses.push(grasp);
+            }
+            return search.next(context);
+        }
+        // Whatever the pad feels ends a search: this is its trial grasp.
+        self.searching = None;
+        context.record.grasps.push(grasp);
         let fit = match fit {
             Ok(fit) => fit,
             Err(FitError::NoContact { peak_dv_v, .. }) => {
@@ -429,6 +572,7 @@ names! {
         Detect: detect,
         Approach: approach,
         TrialGrasp: trial_grasp,
+        Search: search,
         Evaluate: evaluate,
         Regrasp: regrasp,
         Verify: verify,
@@ -489,7 +633,6 @@ mod tests {
     use super::*;
     use crate::detector::{CableDetection, Detections};
     use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
-    use crate::hw::{DeviceError, DeviceKind};
     use crate::perception::tactile::{Estimator, FitConfig};
     use crate::sim::tactile_model::SimTactileConfig;
     use crate::sim::tactile_model::TactileModel;
@@ -520,7 +663,33 @@ mod tests {
                 Translation3::new(0.0, 0.0, -10.0),
                 UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
             ),
+            prior: None,
+            touch_only: false,
         }
+    }
+
+    /// A plan with a prior at the base's origin, σ 10 mm across and
+    /// 0.1 rad: its search tries 0, +10.65, −10.65, +21.3, −21.3 mm
+    /// across, at most `max_moves` of them.
+    fn searching_plan(touch_only: bool, max_moves: usize) -> Plan {
+        Plan {
+            prior: Some(Prior {
+                base_from_cable: Isometry3::identity(),
+                position_sigma_mm: 10.0,
+                angle_sigma_rad: 0.1,
+                max_moves,
+            }),
+            touch_only,
+            ..plan(1, Estimator::Centroids)
+        }
+    }
+
+    /// How far across the prior a grasp at `base_from_tcp` aims: with a
+    /// zero target the pad's frame is the aimed cable frame, and the
+    /// prior's is the base's.
+    fn across_prior_mm(base_from_tcp: &Isometry3<f64>) -> f64 {
+        let tcp_from_sensor = plan(1, Estimator::Centroids).tcp_from_sensor;
+        (base_from_tcp * tcp_from_sensor).translation.vector.y
     }
 
     struct Harness {
@@ -535,7 +704,10 @@ mod tests {
         }
 
         fn with_estimator(max_regrasps: u32, estimator: Estimator) -> Self {
-            let plan = plan(max_regrasps, estimator);
+            Self::with_plan(plan(max_regrasps, estimator))
+        }
+
+        fn with_plan(plan: Plan) -> Self {
             let record = RunRecord::new("t", "c", 0, plan.target, plan.tolerance);
             let mut context = Context::new(plan, record);
             let machine = GraspTask::new()
@@ -597,6 +769,20 @@ mod tests {
             }));
             assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
             self.feed(Event::Arrived).expect("grasp command")
+        }
+
+        /// Start and bias; with a touch-only plan, then also at the
+        /// standoff of the search's first pose.
+        fn up_to_detect_or_approach(&mut self) -> Option<Command> {
+            self.feed(Event::Start);
+            self.feed(self.frames(50, None))
+        }
+
+        fn grasped_nothing(&mut self) -> Option<Command> {
+            self.feed(Event::Grasped {
+                base_from_tcp: Isometry3::identity(),
+                grip: GripOutcome::Empty,
+            })
         }
 
         fn grasped_at(&mut self, base_from_tcp: Isometry3<f64>) -> Option<Command> {
@@ -850,5 +1036,146 @@ mod tests {
         h.feed(Event::Start);
         h.feed(h.frames(10, None));
         assert_eq!(h.state(), State::fault());
+    }
+
+    #[test]
+    fn without_a_detection_a_prior_starts_a_search_at_its_mean() {
+        let mut h = Harness::with_plan(searching_plan(false, 5));
+        assert_eq!(h.up_to_detect_or_approach(), Some(Command::Detect));
+        let moved = h.feed(Event::Detected(Detections {
+            cables: Vec::new(),
+            image: None,
+        }));
+        assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
+        let Some(Command::Grasp { base_from_tcp, .. }) = h.feed(Event::Arrived) else {
+            panic!("expected the trial grasp in {:?}", h.state());
+        };
+        assert!(across_prior_mm(&base_from_tcp).abs() < 1e-9);
+        let touch_only = h.context.record.touch_only.as_ref().expect("searching");
+        assert_eq!(touch_only.why, WhyTouchOnly::NoCableDetected);
+        assert_eq!(touch_only.search_moves, 1);
+    }
+
+    #[test]
+    fn a_touch_only_plan_does_not_look() {
+        let mut h = Harness::with_plan(searching_plan(true, 5));
+        let moved = h.up_to_detect_or_approach();
+        assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
+        assert_eq!(h.state(), State::approach());
+        let why = h.context.record.touch_only.as_ref().map(|t| &t.why);
+        assert_eq!(why, Some(&WhyTouchOnly::Forced));
+    }
+
+    #[test]
+    fn the_search_steps_across_until_the_pad_feels_the_cable_then_judges_that_grasp() {
+        let mut h = Harness::with_plan(searching_plan(true, 5));
+        h.up_to_detect_or_approach();
+        assert!(matches!(
+            h.feed(Event::Arrived),
+            Some(Command::Grasp { .. })
+        ));
+        // The jaws close on nothing: on to the next pose, one step up.
+        let Some(Command::Probe { base_from_tcp, .. }) = h.grasped_nothing() else {
+            panic!("expected a probe in {:?}", h.state());
+        };
+        assert_eq!(h.state(), State::search());
+        assert!((across_prior_mm(&base_from_tcp) - 10.65).abs() < 1e-9);
+        // They hold something the pad does not feel: a miss, then a step
+        // down.
+        assert!(matches!(
+            h.grasped_at(Isometry3::identity()),
+            Some(Command::ReadTactile { .. })
+        ));
+        let Some(Command::Probe { base_from_tcp, .. }) = h.feed(h.frames(4, None)) else {
+            panic!("expected a probe in {:?}", h.state());
+        };
+        assert!((across_prior_mm(&base_from_tcp) + 10.65).abs() < 1e-9);
+        // The pad feels the cable on target: the search's trial grasp.
+        h.grasped_at(Isometry3::identity());
+        assert_eq!(h.feed(h.frames(4, Some(LineInSensor::new(0.0, 0.1)))), None);
+        assert_eq!(h.state(), State::done());
+        let record = &h.context.record;
+        assert!(matches!(
+            record.outcome,
+            Some(RunOutcome::Success { regrasps: 0 })
+        ));
+        let touch_only = record.touch_only.as_ref().expect("searched");
+        assert_eq!(touch_only.search_moves, 3);
+        assert_eq!(touch_only.misses.len(), 1);
+        assert_eq!(record.grasps.len(), 1);
+        let states: Vec<_> = record.transitions.iter().map(|t| t.to).collect();
+        let expected = [
+            State::prepare(),
+            State::approach(),
+            State::trial_grasp(),
+            State::search(),
+            State::evaluate(),
+            State::search(),
+            State::evaluate(),
+            State::done(),
+        ];
+        assert_eq!(states, expected.map(|state| state.name()));
+    }
+
+    #[test]
+    fn a_search_that_feels_nothing_fails_after_its_last_move() {
+        let mut h = Harness::with_plan(searching_plan(true, 3));
+        h.up_to_detect_or_approach();
+        h.feed(Event::Arrived);
+        assert!(matches!(h.grasped_nothing(), Some(Command::Probe { .. })));
+        assert!(matches!(h.grasped_nothing(), Some(Command::Probe { .. })));
+        assert_eq!(h.grasped_nothing(), None);
+        assert_eq!(h.state(), State::failed());
+        let Some(RunOutcome::Failed { reason }) = &h.context.record.outcome else {
+            panic!("{:?}", h.context.record.outcome);
+        };
+        let Failure::SearchExhausted {
+            search_moves,
+            covered_across_mm,
+            position_sigma_mm,
+            ..
+        } = reason
+        else {
+            panic!("{reason:?}");
+        };
+        assert_eq!((*search_moves, *position_sigma_mm), (3, 10.0));
+        // ±10.65 mm and the pad's ±7.1 mm band.
+        assert!((covered_across_mm - 17.75).abs() < 1e-9);
+        assert!(
+            reason
+                .to_string()
+                .starts_with("no cable felt in 3 search move(s)")
+        );
+    }
+
+    #[test]
+    fn an_unusable_detector_leads_to_a_search_with_a_prior_and_a_fault_without() {
+        let unusable = DeviceError::Unusable {
+            device: DeviceKind::Detector,
+            reason: "the model is missing".into(),
+        };
+        let mut h = Harness::with_plan(searching_plan(false, 5));
+        h.up_to_detect_or_approach();
+        let moved = h.feed(Event::DeviceFault(unusable.clone()));
+        assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
+        match h.context.record.touch_only.as_ref().map(|t| &t.why) {
+            Some(WhyTouchOnly::DetectorUnusable { error }) => {
+                assert!(error.contains("the model is missing"), "{error}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let mut h = Harness::new(1);
+        h.up_to_detect_or_approach();
+        h.feed(Event::DeviceFault(unusable));
+        assert_eq!(h.state(), State::fault());
+        // Another device's fault while detecting stays a fault.
+        let mut h = Harness::with_plan(searching_plan(false, 5));
+        h.up_to_detect_or_approach();
+        h.feed(Event::DeviceFault(DeviceError::Timeout {
+            device: DeviceKind::Arm,
+            waited_ms: 500,
+        }));
+        assert_eq!(h.state(), State::fault());
+        assert!(h.context.record.touch_only.is_none());
     }
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::task::TaskFile;
+use crate::task::{TaskFile, parse_task};
 
 /// Why a parameter could not be set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -32,7 +32,7 @@ pub struct TaskParams {
 impl TaskParams {
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let text = read(path)?;
-        let task: TaskFile = parse(path, &text)?;
+        let task = parse_task(path, &text)?;
         let mut table: toml::Table = parse(path, &text)?;
         // Optional values with a default are parameters too, at the value
         // the task file's loader gave them.
@@ -99,7 +99,7 @@ impl TaskParams {
             }
         }
         let text = toml::to_string(&table).map_err(|e| invalid(e.to_string()))?;
-        let task = parse::<TaskFile>(&self.path, &text).map_err(|error| match error {
+        let task = parse_task(&self.path, &text).map_err(|error| match error {
             ConfigError::Invalid { message, .. } => invalid(message),
             other => invalid(other.to_string()),
         })?;
@@ -159,6 +159,7 @@ mod tests {
         p.set("tactile.estimator", "ridge").unwrap();
         p.set("regrasp.max_regrasps", "4").unwrap();
         p.set("regrasp.correction_gain.n", "1.2").unwrap();
+        p.set("prior.max_search_moves", "9").unwrap();
         let task = p.task();
         assert_eq!(task.tolerance.n_mm, 0.25);
         assert_eq!(
@@ -167,6 +168,7 @@ mod tests {
         );
         assert_eq!(task.regrasp.max_regrasps, 4);
         assert_eq!(task.regrasp.correction_gain.n, 1.2);
+        assert_eq!(task.prior.as_ref().map(|p| p.max_search_moves), Some(9));
     }
 
     #[test]
@@ -199,5 +201,11 @@ mod tests {
             Err(ParamError::Unknown { .. })
         ));
         assert_eq!(p.task().tolerance.n_mm, 1.0);
+        let error = p.set("prior.angle_sigma_rad", "2").unwrap_err();
+        assert!(error.to_string().contains("[0, π/2]"), "{error}");
+        assert!(matches!(
+            p.set("prior.max_search_moves", "0"),
+            Err(ParamError::Invalid { .. })
+        ));
     }
 }

@@ -4,6 +4,7 @@ use nalgebra::Isometry3;
 
 use crate::cell::CellFile;
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
+use crate::perception::tactile::search::Prior;
 use crate::perception::tactile::{Estimator, FitConfig};
 use crate::task::TaskFile;
 
@@ -24,6 +25,11 @@ pub struct Plan {
     pub estimator: Estimator,
     /// Where the pad sits on the hand.
     pub tcp_from_sensor: Isometry3<f64>,
+    /// Where a search by touch starts when the camera cannot place the
+    /// cable; without one such a run fails.
+    pub prior: Option<Prior>,
+    /// Search from the prior without looking; only with a prior.
+    pub touch_only: bool,
 }
 
 impl Plan {
@@ -46,6 +52,8 @@ impl Plan {
             },
             estimator: task.tactile.estimator,
             tcp_from_sensor: cell.tactile.tcp_from_sensor.isometry(),
+            prior: task.prior.as_ref().map(|prior| prior.prior()),
+            touch_only: task.task.touch_only && task.prior.is_some(),
         }
     }
 }

@@ -38,6 +38,9 @@ struct Recording {
     recorder: Recorder,
     transitions: usize,
     grasps: usize,
+    /// A search by touch's misses written: grasps too, so that a replay
+    /// finds each grasp's frames.
+    misses: usize,
     /// Flush after every step (interactive runs), or only at the end.
     flush_each_step: bool,
 }
@@ -78,6 +81,7 @@ impl Runner {
             recorder: Recorder::create(path, &self.run_message(0.0))?,
             transitions: 0,
             grasps: 0,
+            misses: 0,
             flush_each_step,
         });
         Ok(())
@@ -189,7 +193,8 @@ impl Runner {
         if let Some(
             Command::MoveTo { base_from_tcp, .. }
             | Command::Grasp { base_from_tcp, .. }
-            | Command::Regrasp { base_from_tcp, .. },
+            | Command::Regrasp { base_from_tcp, .. }
+            | Command::Probe { base_from_tcp, .. },
         ) = command
         {
             recorder.pose(Topic::ArmTarget, now_s, base_from_tcp)?;
@@ -204,6 +209,11 @@ impl Runner {
             recorder.camera_image(now_s, image)?;
         }
         let record = &self.context.record;
+        let misses = record.touch_only.as_ref().map_or(&[][..], |t| &t.misses);
+        for miss in &misses[recording.misses..] {
+            recorder.grasp(miss, self.context.plan.estimator)?;
+        }
+        recording.misses = misses.len();
         for grasp in &record.grasps[recording.grasps..] {
             recorder.grasp(grasp, self.context.plan.estimator)?;
         }

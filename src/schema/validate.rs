@@ -51,6 +51,19 @@ pub fn line_angle<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     }
 }
 
+/// An angle in [0, π/2]: the spread of a line's direction, which is only
+/// known modulo π.
+pub fn angle_spread<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if (0.0..=std::f64::consts::FRAC_PI_2).contains(&v) {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected an angle in [0, π/2] rad, found {v}"
+        )))
+    }
+}
+
 /// A fraction in [0, 1].
 pub fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     let v = f64::deserialize(d)?;
@@ -63,6 +76,12 @@ pub fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     }
 }
 
+/// A fraction in [0, 1], for an optional key (`#[serde(default)]` makes
+/// it `None` when absent).
+pub fn some_fraction<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    fraction(d).map(Some)
+}
+
 /// A count ≥ 1.
 pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
     let v = usize::deserialize(d)?;
@@ -70,6 +89,19 @@ pub fn at_least_one<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> 
         Ok(v)
     } else {
         Err(D::Error::custom("expected a count ≥ 1, found 0"))
+    }
+}
+
+/// A count of moves the cell makes one after the other, in 1..=100:
+/// more would keep a cell busy for many minutes, a likely slip.
+pub fn moves<'de, D: Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    let v = usize::deserialize(d)?;
+    if (1..=100).contains(&v) {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!(
+            "expected a count in 1..=100, found {v}"
+        )))
     }
 }
 

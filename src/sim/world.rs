@@ -117,15 +117,23 @@ pub struct SimWorld {
     pub squeeze_fraction: f64,
 }
 
+impl WorldConfig {
+    /// The free cable's midpoint frame before anything touches it: its
+    /// true grasp frame.
+    pub fn base_from_cable(&self) -> Isometry3<f64> {
+        cable_frame(
+            self.cable_center_mm,
+            self.cable_yaw_rad,
+            self.cable_tilt_rad,
+        )
+    }
+}
+
 impl SimWorld {
     /// The scene of `config`, with the arm parked 150 mm above the cable
     /// in the pose that would grasp it perfectly, and the jaws closed.
     pub fn new(config: &WorldConfig, tcp_from_sensor: Isometry3<f64>) -> Self {
-        let base_from_cable = cable_frame(
-            config.cable_center_mm,
-            config.cable_yaw_rad,
-            config.cable_tilt_rad,
-        );
+        let base_from_cable = config.base_from_cable();
         let base_from_tcp =
             Translation3::new(0.0, 0.0, 150.0) * base_from_cable * tcp_from_sensor.inverse();
         Self {

@@ -9,7 +9,7 @@ use super::task_file::Tolerance;
 use crate::geometry::CorrectionGain;
 use crate::perception::tactile::Estimator;
 use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::schema::validate::{at_least_one, non_negative, non_negative_range};
+use crate::schema::validate::{at_least_one, non_negative, non_negative_range, some_fraction};
 
 /// A campaign file, e.g. `tasks/paper-regrasp-campaign.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -67,6 +67,24 @@ pub struct Perturbations {
     /// Range of the tactile noise (fraction of the taxels' swing).
     #[serde(deserialize_with = "non_negative_range")]
     pub sensor_noise_fraction: [f64; 2],
+    /// What finds the cable at each trial's start.
+    #[serde(default)]
+    pub start: TrialStart,
+}
+
+/// What finds the cable at a trial's start.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrialStart {
+    /// An oracle in place of the cell's detector, off by the drawn start
+    /// offset and angle: the paper's experiment, which starts each trial
+    /// from a chosen error.
+    #[default]
+    Oracle,
+    /// The cell's own detector (its camera and the vision pipeline, which
+    /// an occlusion hides from), so each start is as good as it finds; the
+    /// start offset and angle ranges go unused.
+    Detector,
 }
 
 /// An estimator and a regrasp budget.
@@ -87,6 +105,30 @@ pub struct Policy {
     /// costs (an error budget). Simulated cells only.
     #[serde(default)]
     pub perfect: Vec<ErrorSource>,
+    /// The share of the cable a board hides from the simulated camera in
+    /// this policy's trials, if not the cell's `hidden_fraction` (0 to 1).
+    /// Simulated cameras only.
+    #[serde(default, deserialize_with = "some_fraction")]
+    pub occlusion_fraction: Option<f64>,
+    /// Which senses find the cable.
+    #[serde(default)]
+    pub sensing: Sensing,
+}
+
+/// Which senses a policy finds the cable with.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sensing {
+    /// The camera, and where it cannot place the cable a search by touch
+    /// from the task's `[prior]`, if it has one.
+    #[default]
+    Both,
+    /// The camera alone: the task's prior is dropped, so a cable the camera
+    /// cannot place fails the trial.
+    Vision,
+    /// Touch alone: a search from the task's `[prior]` without looking, its
+    /// mean at the trial's start offset from the true grasp frame.
+    Touch,
 }
 
 /// A source of error of the simulated cell that a policy can switch off.

@@ -12,5 +12,5 @@ pub mod load;
 pub mod task_file;
 
 pub use campaign_file::CampaignFile;
-pub use load::{FileKind, check_file, load_task};
+pub use load::{FileKind, check_file, load_task, parse_task};
 pub use task_file::TaskFile;

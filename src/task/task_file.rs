@@ -4,7 +4,9 @@ use serde::Deserialize;
 
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::Estimator;
-use crate::schema::validate::{at_least_one, finite, line_angle, positive};
+use crate::perception::tactile::search::Prior;
+use crate::schema::FrameConfig;
+use crate::schema::validate::{angle_spread, at_least_one, finite, line_angle, moves, positive};
 
 /// A task file, e.g. `tasks/regrasp.toml`.
 #[derive(Debug, Clone, Deserialize)]
@@ -19,6 +21,10 @@ pub struct TaskFile {
     pub grasp: Grasp,
     pub regrasp: Regrasp,
     pub tactile: TactileEvaluation,
+    /// Where the cable roughly lies: without it a run the camera cannot
+    /// help fails; with it the run searches by touch.
+    #[serde(default)]
+    pub prior: Option<PriorTable>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -30,6 +36,40 @@ pub struct TaskSection {
     /// Seed of the simulated cell's randomness; `--seed` overrides it.
     #[serde(default)]
     pub seed: Option<u64>,
+    /// Search by touch from the `[prior]` without looking (for
+    /// experiments: the paper's tactile-only case).
+    #[serde(default)]
+    pub touch_only: bool,
+}
+
+/// The cable's rough grasp frame and its uncertainty, for a search by
+/// touch when the camera cannot place the cable.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriorTable {
+    /// In the base frame, as a detector gives it: x along the cable, y
+    /// across it on the side the hand comes from, z the closing axis.
+    pub base_from_cable: FrameConfig,
+    /// σ of the cable's position across it (the frame's y).
+    #[serde(deserialize_with = "positive")]
+    pub position_sigma_mm: f64,
+    /// σ of its direction about the closing axis (the frame's z).
+    #[serde(deserialize_with = "angle_spread")]
+    pub angle_sigma_rad: f64,
+    /// Grasps the search may make, the first at the prior's mean included.
+    #[serde(deserialize_with = "moves")]
+    pub max_search_moves: usize,
+}
+
+impl PriorTable {
+    pub fn prior(&self) -> Prior {
+        Prior {
+            base_from_cable: self.base_from_cable.isometry(),
+            position_sigma_mm: self.position_sigma_mm,
+            angle_sigma_rad: self.angle_sigma_rad,
+            max_moves: self.max_search_moves,
+        }
+    }
 }
 
 /// A cable pose on the pad in the paper's sensor frame.

@@ -13,10 +13,24 @@ use std::process::{Command, Output};
 use cablecell::cell::CellFile;
 use cablecell::cell::load_cell;
 use cablecell::detector::config::{DetectorBackend, OracleConfig};
+use cablecell::orchestrator::State;
 
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
+
+/// The states the regrasp task enters after idle when one regrasp brings
+/// its trial grasp into tolerance.
+pub const ONE_REGRASP_PATH: [State; 8] = [
+    State::Prepare {},
+    State::Detect {},
+    State::Approach {},
+    State::TrialGrasp {},
+    State::Evaluate {},
+    State::Regrasp {},
+    State::Verify {},
+    State::Done {},
+];
 
 /// The binary, to be run from the project's root.
 pub fn command() -> Command {

@@ -61,6 +61,7 @@ pub fn draw_scene(
         light: Light::default(),
         noise_sigma,
         blur_sigma_px: 0.0,
+        occluders: Vec::new(),
         marker: None,
     };
     render(&spec, &mut ChaCha8Rng::seed_from_u64(seed))

@@ -3,8 +3,9 @@
 
 use cablecell::orchestrator::{Command, Runner};
 use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS};
+use cablecell::record::{GraspRecord, RunRecord};
 
-use super::super::run::{print_outcome, print_transition};
+use super::super::run::{attempt_name, print_outcome, print_transition};
 use super::map::draw_map;
 use super::session::Loaded;
 
@@ -28,6 +29,7 @@ fn command_name(command: &Command) -> &'static str {
         Command::Grasp { .. } => "descend and grasp",
         Command::ReadTactile { .. } => "read the tactile frames",
         Command::Regrasp { .. } => "release, move by T_corr, grasp again",
+        Command::Probe { .. } => "release, move to the search's next pose, grasp",
         Command::SafeStop { .. } => "safe stop (stop the arm, open the jaws)",
     }
 }
@@ -66,10 +68,9 @@ pub(super) fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
         .base_from_tcp()
         .map_err(|e| format!("the arm did not answer: {e}"))?;
     println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
-    if let Some(grasp) = loaded.driver.runner().record().grasps.last() {
+    if let Some((name, grasp)) = latest_grasp(loaded.driver.runner().record()) {
         println!(
-            "at the latest grasp ({}): {}",
-            attempt_name(grasp.attempt),
+            "at the latest grasp ({name}): {}",
             pose_text(&grasp.base_from_tcp)
         );
     }
@@ -90,18 +91,21 @@ fn pose_text(pose: &nalgebra::Isometry3<f64>) -> String {
     )
 }
 
-fn attempt_name(attempt: u32) -> String {
-    match attempt {
-        0 => "trial grasp".into(),
-        k => format!("regrasp {k}"),
-    }
+/// The latest grasp whose pad was read, with its name.
+fn latest_grasp(record: &RunRecord) -> Option<(String, &GraspRecord)> {
+    let grasp = record.latest_grasp()?;
+    // A search's misses all come before the trial grasp.
+    let name = if record.grasps.is_empty() {
+        "search miss".to_owned()
+    } else {
+        attempt_name(grasp.attempt)
+    };
+    Some((name, grasp))
 }
 
 pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
     let record = loaded.driver.runner().record();
-    let grasp = record
-        .grasps
-        .last()
+    let (name, grasp) = latest_grasp(record)
         .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
     let pitch_mm = loaded.driver.runner().plan().fit.pitch_mm;
     let line = grasp.fit.as_ref().map(Estimate::line);
@@ -110,8 +114,7 @@ pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
         _ => Vec::new(),
     };
     println!(
-        "{} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
-        attempt_name(grasp.attempt),
+        "{name} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
         grasp.t_s,
         grasp.map.peak_dv_v()
     );

@@ -5,13 +5,14 @@
 use std::path::PathBuf;
 
 use opencv::aruco::PREDEFINED_DICTIONARY_NAME;
+use rand::{Rng, RngExt};
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
 use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
 use crate::schema::FrameConfig;
-use crate::schema::validate::{non_negative, positive};
-use crate::sim::render::{Appearance, Background};
+use crate::schema::validate::{fraction, non_negative, positive, some_fraction};
+use crate::sim::render::{Appearance, Background, Board, Occlusion};
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -124,18 +125,80 @@ pub struct SimCameraConfig {
     /// Optical blur, pixels (σ).
     #[serde(deserialize_with = "non_negative")]
     pub blur_sigma_px: f64,
+    /// What hides the cable from the camera; none when absent.
+    #[serde(default)]
+    pub occlusion: Option<OcclusionConfig>,
 }
 
 impl SimCameraConfig {
     /// How the simulated scene looks: this file's background, cable colour,
-    /// noise and blur under the renderer's default light.
-    pub fn appearance(&self) -> Appearance {
+    /// noise, blur and occlusion under the renderer's default light. A
+    /// board's position along the cable, when the file does not fix it, and
+    /// its texture are drawn from `camera_stream` (the cell's camera
+    /// stream, so a seed places it, the same for every policy of a
+    /// campaign's trial); nothing is drawn when nothing is hidden.
+    pub fn appearance(&self, camera_stream: &mut impl Rng) -> Appearance {
         Appearance {
             background: self.background.clone(),
             cable_bgr: self.cable_bgr,
             noise_sigma: self.noise_sigma,
             blur_sigma_px: self.blur_sigma_px,
+            occlusion: self
+                .occlusion
+                .as_ref()
+                .map_or_else(Occlusion::default, |o| o.placed(camera_stream)),
             ..Appearance::default()
+        }
+    }
+}
+
+/// `[camera.backend.sim.occlusion]`: a board lying over a stretch of the
+/// cable, and the arm's hand in view.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OcclusionConfig {
+    /// The share of the cable's length in the image the board hides, 0
+    /// (no board) to 1 (all of it).
+    #[serde(deserialize_with = "fraction")]
+    pub hidden_fraction: f64,
+    /// Where along the cable the hidden stretch lies, 0 (from its start,
+    /// the left end in the image) to 1 (up to its end); drawn per seed
+    /// when absent.
+    #[serde(deserialize_with = "some_fraction")]
+    pub position: Option<f64>,
+    /// The board's colour.
+    pub bgr: [u8; 3],
+    /// The arm's hand (fingers, the gripper's housing, the wrist) drawn
+    /// where the TCP is, covering the cable as it comes down over it.
+    pub arm_in_view: bool,
+}
+
+impl Default for OcclusionConfig {
+    /// Nothing hidden: a pale cardboard board, were it given a share.
+    fn default() -> Self {
+        Self {
+            hidden_fraction: 0.0,
+            position: None,
+            bgr: [150, 175, 195],
+            arm_in_view: false,
+        }
+    }
+}
+
+impl OcclusionConfig {
+    /// The occlusion with its board placed: its position drawn from `rng`
+    /// unless fixed, then its texture's seed; no board, and nothing drawn,
+    /// when it hides nothing.
+    fn placed(&self, rng: &mut impl Rng) -> Occlusion {
+        let board = (self.hidden_fraction > 0.0).then(|| Board {
+            hidden_fraction: self.hidden_fraction,
+            position: self.position.unwrap_or_else(|| rng.random_range(0.0..=1.0)),
+            bgr: self.bgr,
+            texture_seed: rng.random(),
+        });
+        Occlusion {
+            board,
+            arm_in_view: self.arm_in_view,
         }
     }
 }

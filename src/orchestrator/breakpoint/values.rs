@@ -13,7 +13,7 @@ pub struct RunValues {
 
 impl RunValues {
     /// Every name a condition may use, with `describe`'s meaning.
-    pub const NAMES: [&'static str; 12] = [
+    pub const NAMES: [&'static str; 13] = [
         "n_mm",
         "alpha_rad",
         "error_n_mm",
@@ -25,6 +25,7 @@ impl RunValues {
         "peak_dv_v",
         "grasps",
         "regrasps",
+        "search_moves",
         "t_s",
     ];
 
@@ -36,16 +37,17 @@ impl RunValues {
             "error_n_mm" | "error_alpha_rad" => "the latest estimate against the target",
             "true_n_mm" | "true_alpha_rad" => "where the cable really lies (simulated cells)",
             "true_error_n_mm" | "true_error_alpha_rad" => "the true pose against the target",
-            "peak_dv_v" => "the largest Δv of the latest grasp's map",
+            "peak_dv_v" => "the largest Δv of the latest grasp's map (a search's miss included)",
             "grasps" => "grasps evaluated so far (trial grasp included)",
             "regrasps" => "regrasps started so far",
+            "search_moves" => "grasps a search by touch made so far (touch-only runs)",
             "t_s" => "the cell's clock at the latest transition",
             _ => "",
         }
     }
 
     pub fn of(record: &RunRecord) -> Self {
-        let grasp = record.grasps.last();
+        let grasp = record.latest_grasp();
         let line = grasp.and_then(|g| g.fit.as_ref()).map(|fit| fit.line());
         let error = grasp.and_then(|g| g.estimated_error);
         let truth = grasp.and_then(|g| g.truth.as_ref());
@@ -63,6 +65,10 @@ impl RunValues {
                 grasp.map(|g| g.map.peak_dv_v()),
                 Some(record.grasps.len() as f64),
                 Some(count(State::Regrasp {}.name()) as f64),
+                record
+                    .touch_only
+                    .as_ref()
+                    .map(|t| f64::from(t.search_moves)),
                 Some(record.transitions.last().map_or(0.0, |t| t.t_s)),
             ],
         }

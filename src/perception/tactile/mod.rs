@@ -6,6 +6,9 @@
 //! [`fit_wire`] finds the cable's direction, one centroid per column or
 //! row, and a linear and a quadratic model of the cable through them.
 //!
+//! When the camera cannot place the cable, [`search`] says where to grasp
+//! until the pad feels it.
+//!
 //! Frame and taxel numbering are the paper's (see [`crate::geometry`]):
 //! origin at the centre of c33, x towards c35, y towards c13.
 
@@ -14,6 +17,7 @@ pub mod estimator;
 pub mod fit;
 pub mod map;
 pub mod ridge_fit;
+pub mod search;
 
 pub use bias::{Bias, BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame};
 pub use estimator::{Estimate, Estimator};

@@ -84,7 +84,7 @@ fn gradient(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderEr
 
 /// Random values at a coarse grid of `cells_x` × `cells_y`, smoothly
 /// enlarged to the image: CV_32FC`channels`, values in [-1, 1].
-fn smooth_noise(
+pub(super) fn smooth_noise(
     width: i32,
     height: i32,
     cells_x: i32,

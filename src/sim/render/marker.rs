@@ -21,8 +21,11 @@ const MARKER_SUPERSAMPLING: i32 = 4;
 
 /// Warps the marker's image (with its white margin) onto `image` through
 /// the homography its corners fix, its edges blended by the warped
-/// coverage.
-pub(super) fn draw_marker(image: &mut Mat, marker: &MarkerSpec) -> Result<(), RenderError> {
+/// coverage. Returns the outline of what it covers: the plate's corners.
+pub(super) fn draw_marker(
+    image: &mut Mat,
+    marker: &MarkerSpec,
+) -> Result<[[f64; 2]; 4], RenderError> {
     if !marker.corners_px.iter().flatten().all(|v| v.is_finite()) {
         return Err(RenderError::BadMarker {
             reason: "a corner is not finite",
@@ -94,21 +97,23 @@ pub(super) fn draw_marker(image: &mut Mat, marker: &MarkerSpec) -> Result<(), Re
     let plate_side = f64::from((modules + 2) * module_px) - 0.5;
     let mut box_min = [f64::INFINITY; 2];
     let mut box_max = [f64::NEG_INFINITY; 2];
-    for [x, y] in [
+    let mut outline_px = [[0.0; 2]; 4];
+    for (corner_px, [x, y]) in outline_px.iter_mut().zip([
         [-0.5, -0.5],
         [plate_side, -0.5],
         [plate_side, plate_side],
         [-0.5, plate_side],
-    ] {
+    ]) {
         let p = image_from_plate * Vector3::new(x, y, 1.0);
         if p.z.is_nan() || p.z <= 0.0 {
             return Err(RenderError::BadMarker {
                 reason: "its corners do not make a marker seen from the front",
             });
         }
+        *corner_px = [p.x / p.z, p.y / p.z];
         for axis in 0..2 {
-            box_min[axis] = box_min[axis].min(p[axis] / p.z);
-            box_max[axis] = box_max[axis].max(p[axis] / p.z);
+            box_min[axis] = box_min[axis].min(corner_px[axis]);
+            box_max[axis] = box_max[axis].max(corner_px[axis]);
         }
     }
     let (width, height) = (image.cols(), image.rows());
@@ -117,7 +122,7 @@ pub(super) fn draw_marker(image: &mut Mat, marker: &MarkerSpec) -> Result<(), Re
     let x1 = (box_max[0].ceil() + 1.0).min(f64::from(width - 1));
     let y1 = (box_max[1].ceil() + 1.0).min(f64::from(height - 1));
     if x0 > x1 || y0 > y1 {
-        return Ok(());
+        return Ok(outline_px);
     }
     let (x0, y0) = (x0 as i32, y0 as i32);
     let (box_width, box_height) = (x1 as i32 - x0 + 1, y1 as i32 - y0 + 1);
@@ -193,5 +198,5 @@ pub(super) fn draw_marker(image: &mut Mat, marker: &MarkerSpec) -> Result<(), Re
             }
         }
     }
-    Ok(())
+    Ok(outline_px)
 }

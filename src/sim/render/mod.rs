@@ -11,11 +11,16 @@
 //! cable's mask is its whole tube, so masks overlap at crossings as in
 //! cables-dev), then the marker, then the lighting, optical blur and
 //! sensor noise, and finally 8-bit rounding. Every random choice comes from
-//! the caller's generator, so a seed fixes the image.
+//! the caller's generator, so a seed fixes the image. What lies in front of
+//! the cables (a board over a stretch of the simulated cable, the arm's
+//! hand) is drawn over them before the marker, and the ground truth says
+//! what of each cable it left visible.
 
 mod background;
 mod dataset;
+mod hand;
 mod marker;
+mod occluder;
 mod random;
 mod tube;
 mod world_view;
@@ -31,6 +36,7 @@ use opencv::prelude::*;
 use rand::{Rng, RngExt};
 
 pub use dataset::{dataset_scene, write_dataset, write_scene_files};
+pub use occluder::{Board, OccluderSpec, Occlusion};
 pub use random::{BackgroundChoice, SceneOptions, random_scene};
 pub use world_view::render_world;
 
@@ -132,6 +138,8 @@ pub struct SceneSpec {
     pub noise_sigma: f64,
     /// Standard deviation of the optical blur, in pixels (0: sharp).
     pub blur_sigma_px: f64,
+    /// Opaque things in front of the cables, drawn over them in order.
+    pub occluders: Vec<OccluderSpec>,
     pub marker: Option<MarkerSpec>,
 }
 
@@ -148,6 +156,12 @@ pub struct RenderedScene {
     /// Each cable's centre line, cut to the image (the longest stretch of
     /// it inside the image; empty for a cable out of view).
     pub centerlines_px: Vec<Vec<[f64; 2]>>,
+    /// Each cable's mask less the pixels whose centre an occluder or the
+    /// marker covers: what the camera sees of it.
+    pub visible_masks: Vec<Mat>,
+    /// The stretches of each cable's centre line (as in `centerlines_px`)
+    /// that no occluder and not the marker covers, in order along it.
+    pub visible_centerlines_px: Vec<Vec<Vec<[f64; 2]>>>,
 }
 
 /// How the simulated world looks to the simulated camera.
@@ -159,11 +173,12 @@ pub struct Appearance {
     pub light: Light,
     pub noise_sigma: f64,
     pub blur_sigma_px: f64,
+    pub occlusion: Occlusion,
 }
 
 impl Default for Appearance {
     /// A dark red cable in front of a light gray wall, a little sensor
-    /// noise and blur, as a lab camera sees it.
+    /// noise and blur, nothing in front of it, as a lab camera sees it.
     fn default() -> Self {
         Self {
             background: Background::Plain {
@@ -174,6 +189,7 @@ impl Default for Appearance {
             light: Light::default(),
             noise_sigma: 2.0,
             blur_sigma_px: 0.5,
+            occlusion: Occlusion::default(),
         }
     }
 }
@@ -190,6 +206,10 @@ pub enum RenderError {
     /// not finite, or a diameter not positive.
     #[error("cable {index} cannot be drawn: {reason}")]
     BadCable { index: usize, reason: &'static str },
+    /// An occluder cannot be drawn: fewer than three corners, or a corner
+    /// or its texture not finite.
+    #[error("occluder {index} cannot be drawn: {reason}")]
+    BadOccluder { index: usize, reason: &'static str },
     /// The marker's corners are not finite.
     #[error("the marker cannot be drawn: {reason}")]
     BadMarker { reason: &'static str },
@@ -233,6 +253,9 @@ pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, Re
     for (index, cable) in scene.cables.iter().enumerate() {
         check_cable(index, cable)?;
     }
+    for (index, occluder) in scene.occluders.iter().enumerate() {
+        occluder::check(index, occluder)?;
+    }
 
     let mut image = background::draw(&scene.background, width, height, rng)?;
     let mut masks = Vec::with_capacity(scene.cables.len());
@@ -248,9 +271,32 @@ pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, Re
             centerlines_px.push(clip_to_image(&cable.centerline_px, width, height));
         }
     }
-    if let Some(marker) = &scene.marker {
-        draw_marker(&mut image, marker)?;
-    }
+    occluder::draw_all(&mut image, &scene.occluders)?;
+    let marker_px = scene
+        .marker
+        .as_ref()
+        .map(|marker| draw_marker(&mut image, marker))
+        .transpose()?;
+    // What covers the cables: the occluders, and the marker's plate.
+    let covers: Vec<&[[f64; 2]]> = scene
+        .occluders
+        .iter()
+        .map(|occluder| occluder.outline_px.as_slice())
+        .chain(marker_px.as_ref().map(|outline| outline.as_slice()))
+        .collect();
+    let hidden = occluder::covered_pixels(width, height, &covers)?;
+    let visible_masks = masks
+        .iter()
+        .map(|mask| {
+            let mut visible = Mat::default();
+            core::subtract(mask, &hidden, &mut visible, &core::no_array(), -1).map(|()| visible)
+        })
+        .collect::<Result<_, _>>()
+        .map_err(cv("take the hidden pixels off the masks"))?;
+    let visible_centerlines_px = centerlines_px
+        .iter()
+        .map(|line| occluder::visible_stretches(line, &covers))
+        .collect();
     apply_light(&mut image, &scene.light)?;
     if scene.blur_sigma_px > 0.0 {
         let mut blurred = Mat::default();
@@ -286,6 +332,8 @@ pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, Re
         masks,
         union_mask,
         centerlines_px,
+        visible_masks,
+        visible_centerlines_px,
     })
 }
 
@@ -480,6 +528,7 @@ mod tests {
             light: Light::default(),
             noise_sigma: 0.0,
             blur_sigma_px: 0.0,
+            occluders: Vec::new(),
             marker: None,
         };
         assert!(matches!(

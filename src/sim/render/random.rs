@@ -155,6 +155,7 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         },
         noise_sigma: rng.random_range(0.5..6.0),
         blur_sigma_px: rng.random_range(0.0..1.0),
+        occluders: Vec::new(),
         marker: None,
     }
 }

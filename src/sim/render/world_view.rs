@@ -3,16 +3,22 @@
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::Rng;
 
-use super::{Appearance, CableSpec, MarkerSpec, RenderError, RenderedScene, SceneSpec, render};
+use super::hand::hand;
+use super::occluder::board_over;
+use super::{
+    Appearance, CableSpec, MarkerSpec, RenderError, RenderedScene, SceneSpec, clip_to_image, render,
+};
 use crate::perception::vision::calibration::{CameraModel, MarkerOnFinger};
 use crate::sim::world::SimWorld;
 
 /// The simulated camera's view of the simulated world: the cable (its
 /// sagging centre line from `sim::cable`, placed by the world, projected
 /// through `base_from_camera` and the intrinsics) drawn as a shaded tube of
-/// the cable's diameter in pixels at its mean depth over the background,
-/// and the finger's marker when it faces the camera. While the jaws hold
-/// the cable it is drawn where it lay when they closed.
+/// the cable's diameter in pixels at its mean depth over the background;
+/// what the appearance puts in front of it (a board over a stretch of the
+/// cable as the image shows it, the arm's hand where the TCP is); and the
+/// finger's marker when it faces the camera. While the jaws hold the cable
+/// it is drawn where it lay when they closed.
 pub fn render_world(
     world: &SimWorld,
     camera: &CameraModel,
@@ -55,6 +61,16 @@ pub fn render_world(
         });
     }
 
+    let mut occluders = Vec::new();
+    if let (Some(board), Some(cable)) = (&appearance.occlusion.board, cables.first()) {
+        let seen_px = clip_to_image(&cable.centerline_px, camera.width_px, camera.height_px);
+        occluders.extend(board_over(&seen_px, cable.diameter_px / 2.0, board));
+    }
+    if appearance.occlusion.arm_in_view {
+        let camera_from_tcp = camera_from_base * world.base_from_tcp;
+        occluders.extend(hand(camera, &camera_from_tcp, world.opening_mm)?);
+    }
+
     let marker = marker.and_then(|marker| {
         let camera_from_marker = camera_from_base * world.base_from_tcp * marker.tcp_from_marker;
         let normal = camera_from_marker.rotation * Vector3::z();
@@ -83,6 +99,7 @@ pub fn render_world(
             light: appearance.light,
             noise_sigma: appearance.noise_sigma,
             blur_sigma_px: appearance.blur_sigma_px,
+            occluders,
             marker,
         },
         rng,
