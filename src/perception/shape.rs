@@ -238,8 +238,9 @@ impl TrueStretches {
         Self { grasped, beyond }
     }
 
-    /// How far `shape` (a polyline, in order along the cable) lies from
-    /// the true cable; `None` for an empty shape.
+    /// How far `shape` (a polyline, in order along the cable, taken to go
+    /// on straight past its ends) lies from the true cable; `None` for an
+    /// empty shape.
     pub fn errors(&self, shape: &[Point3<f64>]) -> Option<StretchErrors> {
         (!shape.is_empty()).then(|| StretchErrors {
             grasped: distances(&self.grasped, shape),
@@ -262,25 +263,40 @@ fn distances(truth: &[Point3<f64>], shape: &[Point3<f64>]) -> Option<Distances> 
     })
 }
 
-/// Distance from `point` to the nearest segment of `polyline` (to its one
-/// point if it has only one).
+/// Distance from `point` to `polyline` (to its one point if it has only
+/// one): to the nearer of the two segments beside its nearest point (the
+/// polyline's points lie a millimetre apart along a smooth curve), the
+/// first and last segments going on straight past the polyline's ends: a
+/// shape that stops short of the stretch measured (the camera's view cut
+/// off, or only the pad's stretch felt) is taken to go on as it ended.
 fn distance_to_polyline(point: &Point3<f64>, polyline: &[Point3<f64>]) -> f64 {
-    let to_segment = |a: &Point3<f64>, b: &Point3<f64>| {
+    let Some(nearest) = (0..polyline.len()).min_by(|&a, &b| {
+        (polyline[a] - point)
+            .norm_squared()
+            .total_cmp(&(polyline[b] - point).norm_squared())
+    }) else {
+        return f64::INFINITY;
+    };
+    let last = polyline.len().saturating_sub(2);
+    let to_segment = |k: usize| {
+        let (a, b) = (polyline[k], polyline[k + 1]);
         let ab = b - a;
         let length_squared = ab.norm_squared();
         let t = if length_squared > 0.0 {
-            ((point - a).dot(&ab) / length_squared).clamp(0.0, 1.0)
+            (point - a).dot(&ab) / length_squared
         } else {
             0.0
         };
-        (point - (a + ab * t)).norm()
+        let low = if k == 0 { f64::NEG_INFINITY } else { 0.0 };
+        let high = if k == last { f64::INFINITY } else { 1.0 };
+        (point - (a + ab * t.clamp(low, high))).norm()
     };
-    match polyline {
-        [one] => (point - one).norm(),
-        _ => polyline
-            .windows(2)
-            .map(|pair| to_segment(&pair[0], &pair[1]))
-            .fold(f64::INFINITY, f64::min),
+    let before = nearest.checked_sub(1).map(to_segment);
+    let after = (nearest + 1 < polyline.len()).then(|| to_segment(nearest));
+    match (before, after) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(d), None) | (None, Some(d)) => d,
+        (None, None) => (polyline[nearest] - point).norm(),
     }
 }
 
@@ -407,6 +423,13 @@ mod tests {
         assert!((beyond.max_mm - 2.0).abs() < 1e-9, "{beyond:?}");
         assert!(beyond.mean_mm > 1.5 && beyond.mean_mm < 2.0, "{beyond:?}");
         assert!(stretches.errors(&[]).is_none());
+        // A shape over the pad only, 0.5 mm off and parallel: taken on
+        // straight, it is 0.5 mm off beyond too.
+        let short: Vec<Point3<f64>> = (-9..=9)
+            .map(|x| Point3::new(f64::from(x), 0.5, 0.0))
+            .collect();
+        let beyond = stretches.errors(&short).unwrap().beyond.unwrap();
+        assert!((beyond.max_mm - 0.5).abs() < 1e-9, "{beyond:?}");
         // A one-point shape: the distance to it.
         let single = stretches.errors(&[Point3::new(0.0, 3.0, 4.0)]).unwrap();
         let grasped = single.grasped.unwrap();
