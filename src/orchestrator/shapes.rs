@@ -4,7 +4,7 @@
 //! arm's measured pose, their fusion, and on a simulated cell their
 //! distances to the true cable. Pure: no device is asked.
 
-use nalgebra::{Point2, Point3};
+use nalgebra::{Point2, Point3, UnitQuaternion, Vector3};
 
 use super::plan::Plan;
 use crate::perception::fusion::fuse;
@@ -75,7 +75,10 @@ pub fn grasp_shapes(
     };
     let fused = touch.and_then(|touch| {
         let sources: Vec<&[ShapePoint]> = vision.into_iter().chain([&touch.shape[..]]).collect();
-        fuse(&sources, &base_from_sensor)
+        // Along the cable as the pad feels it, whatever its angle there.
+        let along =
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), touch.curve.angle_at_centre_rad());
+        fuse(&sources, &(base_from_sensor * along))
     });
     let errors = truth.map(|truth| {
         let stretches =

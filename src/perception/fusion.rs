@@ -36,12 +36,12 @@ pub const BEND_PRIOR_LENGTH_MM: f64 = 50.0;
 const MIN_SIGMA_MM: f64 = 0.01;
 
 /// The cable through every point of `sources`, parameterised along the
-/// x-axis of `base_from_plane` (the pad's frame at the grasp, x along the
-/// pad): the points are taken in that frame, and their y (across the cable
-/// in the pad's plane) and z (the depth from it) are fitted against x by
-/// one B-spline with weights 1/σ². The curve comes back in the base frame
-/// one [`SHAPE_SPACING_MM`] apart in x, each point with the fit's standard
-/// deviation there.
+/// x-axis of `base_from_plane` (a frame in the pad's plane at the grasp, x
+/// along the cable): the points are taken in that frame, and their y
+/// (across the cable in the pad's plane) and z (the depth from it) are
+/// fitted against x by one B-spline with weights 1/σ². The curve comes
+/// back in the base frame one [`SHAPE_SPACING_MM`] apart in x, each point
+/// with the fit's standard deviation there.
 ///
 /// The cable must run along the frame's x and not turn back on itself
 /// along it (a cable between two supports, grasped across). `None` if the

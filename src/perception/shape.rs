@@ -70,6 +70,18 @@ impl TactileCurve {
         }
     }
 
+    /// The curve's direction at the pad's centre (or across from it), as
+    /// an angle from the pad's x in (-π/2, π/2].
+    pub fn angle_at_centre_rad(&self) -> f64 {
+        match *self {
+            TactileCurve::Line(line) => line.alpha_rad,
+            TactileCurve::Quadratic(Direction::Horizontal, q) => q.b.atan(),
+            TactileCurve::Quadratic(Direction::Vertical, q) => {
+                LineInSensor::through(Vector2::zeros(), Vector2::new(q.b, 1.0)).alpha_rad
+            }
+        }
+    }
+
     /// The curve's standard deviation along the pad, from how the
     /// centroids it was fitted to scatter about it: the least-squares
     /// standard error at each point (the residuals' variance times the
@@ -326,6 +338,23 @@ mod tests {
         let diagonal = TactileCurve::Line(LineInSensor::new(std::f64::consts::FRAC_PI_4, 11.5));
         let corner = diagonal.points_in_sensor(8.875);
         assert!(!corner.is_empty() && corner.len() < 4, "{corner:?}");
+    }
+
+    #[test]
+    fn the_angle_at_the_centre_is_the_curves_tangent_there() {
+        let line = TactileCurve::Line(LineInSensor::new(0.3, 1.0));
+        assert_eq!(line.angle_at_centre_rad(), 0.3);
+        let q = Quadratic {
+            a: 0.05,
+            b: 0.2,
+            c: 1.0,
+        };
+        let across = TactileCurve::Quadratic(Direction::Horizontal, q);
+        assert!((across.angle_at_centre_rad() - 0.2f64.atan()).abs() < 1e-12);
+        // x = 0.2 y + …: nearly along y, leaning towards +x.
+        let along_y = TactileCurve::Quadratic(Direction::Vertical, q);
+        let expected = std::f64::consts::FRAC_PI_2 - 0.2f64.atan();
+        assert!((along_y.angle_at_centre_rad() - expected).abs() < 1e-12);
     }
 
     #[test]
