@@ -8,6 +8,7 @@ pub mod geometry;
 pub mod hw;
 pub mod orchestrator;
 pub mod perception;
+pub mod plot;
 pub mod record;
 pub mod recording;
 pub mod schema;

@@ -77,6 +77,11 @@ enum Command {
     },
     /// Print the task's state machine as Graphviz DOT (`| dot -Tsvg`).
     Graph { task: PathBuf },
+    /// Draw a figure from a recording, as PNG or SVG.
+    Plot {
+        #[command(subcommand)]
+        figure: cli::plot::PlotCommand,
+    },
     /// Run a campaign: many seeded trials of a task, each policy of the file
     /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
     /// summarised side by side.
@@ -285,6 +290,7 @@ fn main() -> ExitCode {
             vision_args,
         } => cli::replay::replay(&file, &estimator, vision.then_some(&vision_args)),
         Command::Graph { task } => cli::graph::graph(&task),
+        Command::Plot { figure } => cli::plot::plot(&figure),
         Command::Campaign {
             file,
             trials,

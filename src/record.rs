@@ -1,11 +1,12 @@
 //! The run record: everything a run did, kept as it happens so that a run
 //! that ends in a fault still has all it recorded up to the fault.
 
-use nalgebra::Isometry3;
-use serde::Serialize;
+use nalgebra::{Isometry3, Point3};
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
 use crate::hw::DeviceKind;
+use crate::perception::shape::{ShapePoint, StretchErrors};
 use crate::perception::tactile::{Estimate, TactileMap};
 
 #[derive(Debug, Clone, Serialize)]
@@ -150,6 +151,60 @@ pub struct GraspRecord {
     pub estimated_error: Option<PoseError>,
     /// Where the cable really lay, when the cell knows (a simulation).
     pub truth: Option<Truth>,
+    /// The cable's shape in the base frame, seen, felt and fused; set by
+    /// the runner once the machine has recorded the grasp.
+    pub shapes: Option<GraspShapes>,
+}
+
+/// The cable's shape at a grasp (the paper's Fig. 12): what the camera saw
+/// before the trial grasp, what the pad says now, both fused, as points in
+/// the base frame with their σ; on a simulated cell, the true cable and
+/// how far each shape lies from it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GraspShapes {
+    /// The pad's frame at the grasp (the arm's measured pose): the fusion
+    /// and its plot work in its x–y plane, x along the pad.
+    pub base_from_sensor: Isometry3<f64>,
+    /// Half the pad's side: the grasped stretch is `|x| ≤` this.
+    pub pad_half_side_mm: f64,
+    /// The detected cable's centre line, where the camera saw it.
+    pub vision: Option<Vec<ShapePoint>>,
+    /// The paper's linear fit (eq. 2) over the pad.
+    pub tactile_linear: Option<Vec<ShapePoint>>,
+    /// The paper's quadratic fit (eq. 3 / 4) over the pad.
+    pub tactile_quadratic: Option<Vec<ShapePoint>>,
+    /// cablecell's ridge line over the pad, when the task's estimator is
+    /// the ridge.
+    pub tactile_ridge: Option<Vec<ShapePoint>>,
+    /// The tactile shape fused with the vision shape.
+    pub fused_from: Option<TactileShape>,
+    pub fused: Option<Vec<ShapePoint>>,
+    /// The true centre line from support to support (simulated cells).
+    pub truth: Option<Vec<Point3<f64>>>,
+    pub errors: Option<ShapeErrors>,
+}
+
+/// Which of the pad's shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TactileShape {
+    Linear,
+    Quadratic,
+    Ridge,
+}
+
+/// How far each shape lies from the true cable over the grasped stretch
+/// and beyond it (simulated cells). A tactile fit is measured along its
+/// curve extended past the pad: touch alone, extrapolated.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ShapeErrors {
+    /// The length measured beyond each end of the pad.
+    pub beyond_mm: f64,
+    pub vision: Option<StretchErrors>,
+    pub tactile_linear: Option<StretchErrors>,
+    pub tactile_quadratic: Option<StretchErrors>,
+    pub tactile_ridge: Option<StretchErrors>,
+    pub fused: Option<StretchErrors>,
 }
 
 #[derive(Debug, Clone, Serialize)]

@@ -46,6 +46,7 @@ fn expected_counts(record: &RunRecord) -> BTreeMap<&'static str, u64> {
         ("/arm/target", targets),
         // The oracle detector looks at no image.
         ("/camera/image", 0),
+        ("/cable/shapes", grasps),
     ])
 }
 

@@ -10,6 +10,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use nalgebra::Point3;
 use serialport::{SerialPort, TTYPort};
 
 use crate::cell::CellFile;
@@ -240,6 +241,12 @@ impl CellDevices {
     /// Where the cable really lies on the pad, if the cell can know it.
     pub fn cable_on_pad_truth(&self) -> Option<LineInSensor> {
         lock(&self.world).held()
+    }
+
+    /// The cable's true centre line in the base frame while the jaws hold
+    /// it (see [`SimWorld::true_centre_line`]), if the cell can know it.
+    pub fn true_centre_line(&self, pad_half_side_mm: f64) -> Option<Vec<Point3<f64>>> {
+        lock(&self.world).true_centre_line(pad_half_side_mm)
     }
 
     /// The simulated world that the simulated and emulated devices share:

@@ -208,11 +208,11 @@ fn print_report(report: &ImageReport) {
             cable.grasp_px[0],
             cable.grasp_px[1],
             cable.direction_rad,
-            cable.spline.control_points_px.len()
+            cable.spline.control_points.len()
         );
         println!(
             "    control points (px): {}",
-            points_text(&cable.spline.control_points_px)
+            points_text(&cable.spline.control_points)
         );
         println!(
             "    along it (px), s = 0, 0.1, ..., 1: {}",

@@ -9,6 +9,7 @@ pub mod device;
 pub mod emulate;
 pub mod eval_vision;
 pub mod graph;
+pub mod plot;
 pub mod render_dataset;
 pub mod repl;
 pub mod replay;

@@ -5,7 +5,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use cablecell::cell::load_cell;
 use cablecell::orchestrator::Runner;
-use cablecell::record::{GraspRecord, RunReport, TransitionRecord};
+use cablecell::perception::shape::Distances;
+use cablecell::record::{GraspRecord, RunReport, ShapeErrors, TransitionRecord};
 use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::task::load_task;
 
@@ -206,6 +207,31 @@ fn print_grasp(name: &str, grasp: &GraspRecord) {
             "", truth.line.n_mm, truth.line.alpha_rad, truth.error.n_mm, truth.error.alpha_rad
         );
     }
+    if let Some(errors) = grasp.shapes.as_ref().and_then(|shapes| shapes.errors) {
+        print_shape_errors(&errors);
+    }
+}
+
+/// Each shape's mean distance to the true cable, on the pad | beyond.
+fn print_shape_errors(errors: &ShapeErrors) {
+    let shapes = [
+        ("vision", errors.vision),
+        ("linear", errors.tactile_linear),
+        ("quadratic", errors.tactile_quadratic),
+        ("ridge", errors.tactile_ridge),
+        ("fused", errors.fused),
+    ];
+    let mm = |d: Option<Distances>| d.map_or("–".to_owned(), |d| format!("{:.2}", d.mean_mm));
+    let each: Vec<String> = shapes
+        .iter()
+        .filter_map(|&(name, e)| Some(format!("{name} {} | {}", mm(e?.grasped), mm(e?.beyond))))
+        .collect();
+    println!(
+        "{:>13}  shape off the true cable, on the pad | {:.0} mm beyond: {} mm",
+        "",
+        errors.beyond_mm,
+        each.join(", ")
+    );
 }
 
 pub(super) fn print_outcome(record: &RunRecord) {

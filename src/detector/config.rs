@@ -139,6 +139,7 @@ impl VisionDetectorConfig {
                 normal: Unit::new_normalize(Vector3::from(self.cable_plane.normal)),
             },
             approach_from: Unit::new_normalize(Vector3::from(self.approach_from)),
+            reprojection_error_px: calibration.reprojection_error_px,
         }
     }
 }

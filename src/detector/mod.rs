@@ -14,15 +14,20 @@ use nalgebra::Isometry3;
 
 use crate::hw::DeviceError;
 use crate::hw::camera::{Camera, CameraImage};
+use crate::perception::shape::ShapePoint;
 
 /// A cable found in the scene.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CableDetection {
     /// Grasp frame at the cable's midpoint (s = 0.5): x along the cable,
     /// y across it in the image plane, towards the side the hand comes
     /// from, z towards the camera. It is the sensor frame that puts the
     /// cable on the pad's x-axis.
     pub base_from_cable: Isometry3<f64>,
+    /// The cable's centre line in the base frame, from end to end of what
+    /// was seen of it (nothing of a stretch hidden from the camera), each
+    /// point with its σ: the vision shape a fusion starts from.
+    pub centre_line: Vec<ShapePoint>,
 }
 
 /// What a detector found, and the image it looked at, if it looked.

@@ -472,6 +472,7 @@ impl GraspTask {
                 error: line.error_to(&context.plan.target),
                 estimate_error: fit.as_ref().ok().map(|fit| fit.line().error_to(&line)),
             }),
+            shapes: None,
         };
         if let (Some(search), Err(FitError::NoContact { .. })) = (&self.searching, &fit) {
             if let Some(touch_only) = &mut context.record.touch_only {
@@ -760,6 +761,7 @@ mod tests {
             assert_eq!(self.feed(bias), Some(Command::Detect));
             let detection = CableDetection {
                 base_from_cable: Isometry3::identity(),
+                centre_line: Vec::new(),
             };
             let moved = self.feed(Event::Detected(Detections {
                 cables: vec![detection],
@@ -949,6 +951,7 @@ mod tests {
         h.feed(Event::Detected(Detections {
             cables: vec![CableDetection {
                 base_from_cable: Isometry3::identity(),
+                centre_line: Vec::new(),
             }],
             image: None,
         }));

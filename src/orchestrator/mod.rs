@@ -4,7 +4,8 @@
 //! carries commands out on a cell (`executor`), the runner that feeds one
 //! to the other (`runner`), and for the REPL the driver that steps, pauses,
 //! breaks and aborts (`driver`, `breakpoint`) and the task's parameters
-//! (`params`); `graph` draws the machine.
+//! (`params`); `graph` draws the machine; `shapes` gives each grasp the
+//! cable's shapes, seen, felt and fused.
 
 pub mod breakpoint;
 pub mod command;
@@ -15,6 +16,7 @@ pub mod machine;
 pub mod params;
 pub mod plan;
 pub mod runner;
+pub mod shapes;
 #[cfg(test)]
 mod test_cell;
 

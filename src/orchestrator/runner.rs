@@ -13,10 +13,12 @@ use super::command::{Command, Event};
 use super::executor::execute;
 use super::machine::{Context, GraspTask, State};
 use super::plan::Plan;
+use super::shapes::{grasp_shapes, pad_half_side_mm};
 use crate::cell::CellDevices;
 use crate::cell::CellFile;
 use crate::detector::Detections;
 use crate::hw::DeviceError;
+use crate::perception::shape::ShapePoint;
 use crate::record::RunRecord;
 use crate::recording::schema::{RunMessage, Timestamp};
 use crate::recording::{Recorder, RecordingError, Topic};
@@ -27,6 +29,8 @@ pub struct Runner {
     context: Context,
     cell: CellDevices,
     recording: Option<Recording>,
+    /// The centre line of the cable the machine aimed at, as detected.
+    vision_shape: Option<Vec<ShapePoint>>,
 }
 
 /// A recorder and how far the record has been written to it.
@@ -53,6 +57,7 @@ impl Runner {
             context,
             cell,
             recording: None,
+            vision_shape: None,
         }
     }
 
@@ -141,12 +146,37 @@ impl Runner {
         event: &Event,
     ) -> Result<(), RecordingError> {
         self.context.now_s = self.cell.clock.now_s();
+        if let Event::Detected(detections) = event {
+            // The machine aims at the first.
+            self.vision_shape = detections
+                .cables
+                .first()
+                .map(|cable| cable.centre_line.clone())
+                .filter(|line| !line.is_empty());
+        }
+        let grasps_before = self.context.record.grasps.len();
         self.machine.handle_with_context(event, &mut self.context);
+        self.add_shapes(grasps_before);
         let result = self.write_recording(state, command, event);
         if result.is_err() {
             self.recording = None;
         }
         result
+    }
+
+    /// The cable's shapes at each grasp the machine recorded from
+    /// `grasps_before` on, fused where the fit is: as it was recorded,
+    /// with the cell's truth of that moment.
+    fn add_shapes(&mut self, grasps_before: usize) {
+        let (record, plan) = (&mut self.context.record, &self.context.plan);
+        if record.grasps.len() <= grasps_before {
+            return;
+        }
+        let truth = self.cell.true_centre_line(pad_half_side_mm(plan));
+        for grasp in &mut record.grasps[grasps_before..] {
+            let shapes = grasp_shapes(grasp, plan, self.vision_shape.as_deref(), truth.as_deref());
+            grasp.shapes = Some(shapes);
+        }
     }
 
     fn write_recording(

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
 use crate::perception::tactile::{Estimator, TAXEL_COUNT};
+use crate::record::GraspShapes;
 
 /// Every channel a recording may hold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -32,10 +33,12 @@ pub enum Topic {
     ArmTarget,
     /// Each image the vision detector looked at, as PNG.
     CameraImage,
+    /// Each grasp's cable shapes: seen, felt, fused and true.
+    CableShapes,
 }
 
 impl Topic {
-    pub const ALL: [Topic; 9] = [
+    pub const ALL: [Topic; 10] = [
         Topic::Run,
         Topic::State,
         Topic::Log,
@@ -45,6 +48,7 @@ impl Topic {
         Topic::GraspPose,
         Topic::ArmTarget,
         Topic::CameraImage,
+        Topic::CableShapes,
     ];
 
     pub fn name(self) -> &'static str {
@@ -58,6 +62,7 @@ impl Topic {
             Topic::GraspPose => "/arm/grasp_pose",
             Topic::ArmTarget => "/arm/target",
             Topic::CameraImage => "/camera/image",
+            Topic::CableShapes => "/cable/shapes",
         }
     }
 
@@ -72,6 +77,7 @@ impl Topic {
             Topic::TactileFit => ("cablecell.TactileFit", TACTILE_FIT_SCHEMA),
             Topic::GraspPose | Topic::ArmTarget => ("foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA),
             Topic::CameraImage => ("foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA),
+            Topic::CableShapes => ("cablecell.CableShapes", CABLE_SHAPES_SCHEMA),
         }
     }
 }
@@ -171,6 +177,17 @@ pub struct TactileFitMessage {
     pub centroids_mm: Vec<[f64; 2]>,
 }
 
+/// A grasp's shapes of the cable (see [`GraspShapes`]), points in mm in
+/// the base frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CableShapesMessage {
+    pub timestamp: Timestamp,
+    /// 0 for the trial grasp, k for the k-th regrasp.
+    pub attempt: u32,
+    #[serde(flatten)]
+    pub shapes: GraspShapes,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Vector3 {
     pub x: f64,
@@ -227,7 +244,7 @@ mod base64_bytes {
 }
 
 macro_rules! schema {
-    ($title:literal, $props:literal) => {
+    ($title:literal, $props:expr) => {
         concat!(
             r#"{"title":""#,
             $title,
@@ -270,6 +287,45 @@ const POSE_IN_FRAME_SCHEMA: &str = schema!(
 const COMPRESSED_IMAGE_SCHEMA: &str = schema!(
     "foxglove.CompressedImage",
     r#""frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}"#
+);
+
+/// A shape: points along the cable in the base frame (mm), each with its σ.
+macro_rules! shape_schema {
+    () => {
+        r#"{"type":["array","null"],"items":{"type":"object","properties":{"in_base_mm":{"type":"array","items":{"type":"number"},"minItems":3,"maxItems":3},"sigma_mm":{"type":"number"}}}}"#
+    };
+}
+/// A shape's distances to the true cable.
+macro_rules! stretch_schema {
+    () => {
+        r#"{"type":["object","null"],"properties":{"grasped":{"type":["object","null"],"properties":{"mean_mm":{"type":"number"},"max_mm":{"type":"number"}}},"beyond":{"type":["object","null"],"properties":{"mean_mm":{"type":"number"},"max_mm":{"type":"number"}}}}}"#
+    };
+}
+const CABLE_SHAPES_SCHEMA: &str = schema!(
+    "cablecell.CableShapes",
+    concat!(
+        r#""attempt":{"type":"integer"},"base_from_sensor":{"type":"object","properties":{"rotation":{"type":"array","items":{"type":"number"}},"translation":{"type":"array","items":{"type":"number"}}}},"pad_half_side_mm":{"type":"number"},"vision":"#,
+        shape_schema!(),
+        r#","tactile_linear":"#,
+        shape_schema!(),
+        r#","tactile_quadratic":"#,
+        shape_schema!(),
+        r#","tactile_ridge":"#,
+        shape_schema!(),
+        r#","fused_from":{"type":["string","null"],"enum":["linear","quadratic","ridge",null]},"fused":"#,
+        shape_schema!(),
+        r#","truth":{"type":["array","null"],"items":{"type":"array","items":{"type":"number"},"minItems":3,"maxItems":3}},"errors":{"type":["object","null"],"properties":{"beyond_mm":{"type":"number"},"vision":"#,
+        stretch_schema!(),
+        r#","tactile_linear":"#,
+        stretch_schema!(),
+        r#","tactile_quadratic":"#,
+        stretch_schema!(),
+        r#","tactile_ridge":"#,
+        stretch_schema!(),
+        r#","fused":"#,
+        stretch_schema!(),
+        "}}"
+    )
 );
 
 #[cfg(test)]

@@ -6,20 +6,21 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use mcap::records::MessageHeader;
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Point3};
 use opencv::core::VectorToVec;
 use serde::Serialize;
 
 use super::RecordingError;
 use super::schema::{
-    CompressedImageMessage, LogMessage, Pose, PoseInFrameMessage, Quaternion, RunMessage,
-    TactileDvMessage, TactileFitMessage, TactileRawMessage, Timestamp, Topic, TransitionMessage,
-    Vector3, log_time_ns,
+    CableShapesMessage, CompressedImageMessage, LogMessage, Pose, PoseInFrameMessage, Quaternion,
+    RunMessage, TactileDvMessage, TactileFitMessage, TactileRawMessage, Timestamp, Topic,
+    TransitionMessage, Vector3, log_time_ns,
 };
 use crate::hw::camera::CameraImage;
 use crate::hw::tactile::TactileFrame;
+use crate::perception::shape::ShapePoint;
 use crate::perception::tactile::{Bias, BiasEstimator, Estimate, Estimator, TactileMap};
-use crate::record::{GraspRecord, RunOutcome, RunRecord, TransitionRecord};
+use crate::record::{GraspRecord, GraspShapes, RunOutcome, RunRecord, TransitionRecord};
 
 /// An MCAP file being written. Messages go straight to the file, not into
 /// chunks, so that whatever was flushed stays readable if the program is
@@ -188,7 +189,18 @@ impl Recorder {
             centroids_mm,
         };
         self.write(Topic::TactileFit, grasp.t_s, &message)?;
-        self.pose(Topic::GraspPose, grasp.t_s, &grasp.base_from_tcp)
+        self.pose(Topic::GraspPose, grasp.t_s, &grasp.base_from_tcp)?;
+        match &grasp.shapes {
+            Some(shapes) => {
+                let message = CableShapesMessage {
+                    timestamp: Timestamp::of(grasp.t_s),
+                    attempt: grasp.attempt,
+                    shapes: to_tenth_micrometre(shapes),
+                };
+                self.write(Topic::CableShapes, grasp.t_s, &message)
+            }
+            None => Ok(()),
+        }
     }
 
     /// An image the camera took, as PNG (lossless, so that a replay runs
@@ -285,6 +297,36 @@ impl Recorder {
                 source,
             })?;
         Ok(self.path)
+    }
+}
+
+/// The shapes with their points and σ rounded to 0.1 µm: far below any
+/// of their errors, and half the text of full-precision floats.
+fn to_tenth_micrometre(shapes: &GraspShapes) -> GraspShapes {
+    let round = |v: f64| (v * 1e4).round() / 1e4;
+    let point = |p: &Point3<f64>| p.map(round);
+    let shape = |points: &Option<Vec<ShapePoint>>| {
+        points.as_ref().map(|points| {
+            points
+                .iter()
+                .map(|p| ShapePoint {
+                    in_base_mm: point(&p.in_base_mm),
+                    sigma_mm: round(p.sigma_mm),
+                })
+                .collect()
+        })
+    };
+    GraspShapes {
+        vision: shape(&shapes.vision),
+        tactile_linear: shape(&shapes.tactile_linear),
+        tactile_quadratic: shape(&shapes.tactile_quadratic),
+        tactile_ridge: shape(&shapes.tactile_ridge),
+        fused: shape(&shapes.fused),
+        truth: shapes
+            .truth
+            .as_ref()
+            .map(|truth| truth.iter().map(point).collect()),
+        ..shapes.clone()
     }
 }
 

@@ -14,6 +14,8 @@
 //!
 //! See docs/simulated-cell.md for the model and the reasons for its values.
 
+use nalgebra::Point3;
+
 use super::world::WorldConfig;
 use crate::geometry::LineInSensor;
 
@@ -91,6 +93,19 @@ impl CableModel {
         let slope = -k * (l.powi(3) - 6.0 * l * x * x + 4.0 * x.powi(3));
         let height = self.sag_mm - deflection;
         (height + slope * (u_mm - u), slope)
+    }
+
+    /// The free cable between its supports, in its midpoint frame (x along
+    /// the line between the supports, y up), a point every `spacing_mm`
+    /// along x from one support to the other.
+    pub fn centre_line_mm(&self, spacing_mm: f64) -> Vec<Point3<f64>> {
+        let half_steps = (self.span_mm / 2.0 / spacing_mm).floor() as i64;
+        (-half_steps..=half_steps)
+            .map(|k| {
+                let u_mm = k as f64 * spacing_mm;
+                Point3::new(u_mm, self.height_and_slope(u_mm).0, 0.0)
+            })
+            .collect()
     }
 
     /// Where the jaws leave the cable they caught at `caught`: moved

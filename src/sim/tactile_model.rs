@@ -31,7 +31,7 @@ use rand_distr::StandardNormal;
 use serde::Deserialize;
 
 use crate::geometry::LineInSensor;
-use crate::perception::tactile::{ADC_MAX, RawFrame, TAXEL_COLS, TAXEL_COUNT};
+use crate::perception::tactile::{ADC_MAX, PAD_HALF_SIDE_PITCH, RawFrame, TAXEL_COLS, TAXEL_COUNT};
 use crate::schema::validate::{fraction, positive, voltage_range};
 
 /// The first simulated pad: a line-spread response, per-taxel offsets and
@@ -69,9 +69,6 @@ pub const NOMINAL_SQUEEZE_FRACTION: f64 = 0.1;
 /// The dent of one pad that gives a full response: the paper's 2.5 mm
 /// cable at the nominal squeeze, half of it per pad.
 const FULL_DENT_MM: f64 = NOMINAL_SQUEEZE_FRACTION * 2.5 / 2.0;
-/// Half the cap's side, in pitches: the outer taxels sit 2 pitches from
-/// the centre and the cap goes on half a pitch beyond them.
-const CAP_HALF_SIDE_PITCH: f64 = 2.5;
 /// Width of the cap's rounded rim, in pitches: from the outer taxels' line
 /// to the edge.
 const RIM_WIDTH_PITCH: f64 = 0.5;
@@ -147,7 +144,7 @@ impl TactileModel {
     /// cap, weighted by the rim's taper.
     pub fn dents(&self, contact: &Contact) -> Dents {
         let depth = contact.squeeze_fraction * contact.diameter_mm / 2.0 / FULL_DENT_MM;
-        let half_side_mm = CAP_HALF_SIDE_PITCH * self.pitch_mm;
+        let half_side_mm = PAD_HALF_SIDE_PITCH * self.pitch_mm;
         let rim_mm = RIM_WIDTH_PITCH * self.pitch_mm;
         let Some((start, end)) = clip_to_square(&contact.line, half_side_mm) else {
             return [0.0; TAXEL_COUNT];

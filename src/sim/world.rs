@@ -3,10 +3,13 @@
 
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3,
+};
 
 use super::cable::CableModel;
 use crate::geometry::{LineInSensor, planar_to_spatial};
+use crate::perception::shape::{SHAPE_SPACING_MM, TactileCurve};
 use crate::schema::validate::{finite, fraction, non_negative, positive, vector3};
 use serde::Deserialize;
 
@@ -158,6 +161,48 @@ impl SimWorld {
 
     fn base_from_sensor(&self) -> Isometry3<f64> {
         self.base_from_tcp * self.tcp_from_sensor
+    }
+
+    /// The cable's centre line in the base frame while the jaws hold it,
+    /// from one support to the other: over the pad (`|x|` in the sensor
+    /// frame up to `pad_half_side_mm`) the line the jaws hold it on,
+    /// elsewhere the free cable as it was caught. (The model has no bend
+    /// between the two: where the jaws moved the cable, its centre line
+    /// steps at the pad's edges.) `None` while nothing is held.
+    pub fn true_centre_line(&self, pad_half_side_mm: f64) -> Option<Vec<Point3<f64>>> {
+        let held = self.held()?;
+        let base_from_sensor = self.base_from_sensor();
+        let sensor_from_base = base_from_sensor.inverse();
+        let free: Vec<Point3<f64>> = self
+            .cable
+            .centre_line_mm(SHAPE_SPACING_MM)
+            .into_iter()
+            .map(|p| self.base_from_cable * p)
+            .collect();
+        let x_in_sensor = |p: &Point3<f64>| (sensor_from_base * p).x;
+        let mut on_pad: Vec<Point3<f64>> = TactileCurve::Line(held)
+            .points_in_sensor(pad_half_side_mm)
+            .into_iter()
+            .map(|p| base_from_sensor * Point3::new(p.x, p.y, 0.0))
+            .collect();
+        // The free cable runs along the sensor's x one way or the other.
+        let rising = free.last().map(x_in_sensor) > free.first().map(x_in_sensor);
+        if rising != (on_pad.last().map(x_in_sensor) > on_pad.first().map(x_in_sensor)) {
+            on_pad.reverse();
+        }
+        let before = free
+            .iter()
+            .take_while(|p| x_in_sensor(p).abs() > pad_half_side_mm);
+        let after = free
+            .iter()
+            .rev()
+            .take_while(|p| x_in_sensor(p).abs() > pad_half_side_mm);
+        let mut line: Vec<Point3<f64>> = before.copied().collect();
+        line.extend(on_pad);
+        let mut tail: Vec<Point3<f64>> = after.copied().collect();
+        tail.reverse();
+        line.extend(tail);
+        Some(line)
     }
 
     /// The free cable as the pad would see it if the jaws closed now: its
@@ -341,6 +386,38 @@ mod tests {
         assert_relative_eq!(free.alpha_rad, expected.alpha_rad, epsilon = 1e-6);
         assert_relative_eq!(free.n_mm, expected.n_mm, epsilon = 1e-6);
         assert!(world.grasp.is_none());
+    }
+
+    #[test]
+    fn the_true_centre_line_follows_the_held_line_over_the_pad() {
+        let mut world = SimWorld::new(&config(), tcp_from_sensor());
+        assert!(world.true_centre_line(8.875).is_none());
+        // Grasp 3 mm off the midpoint across the cable: the jaws move it.
+        let sensor = world.base_from_cable * Translation3::new(0.0, 3.0, 0.0);
+        world.base_from_tcp = over(&world, sensor);
+        let held = world.close_on_cable(0.05).unwrap();
+        let line = world.true_centre_line(8.875).unwrap();
+        let sensor_from_base = world.base_from_sensor().inverse();
+        let in_sensor: Vec<Point3<f64>> = line.iter().map(|p| sensor_from_base * p).collect();
+        // From support to support, in order along the pad's x.
+        assert!(
+            in_sensor.windows(2).all(|w| w[1].x > w[0].x),
+            "{in_sensor:?}"
+        );
+        assert!(in_sensor[0].x < -70.0 && in_sensor[in_sensor.len() - 1].x > 70.0);
+        for p in &in_sensor {
+            if p.x.abs() <= 8.875 {
+                let off = held.distance_mm(Vector2::new(p.x, p.y));
+                assert!(off.abs() < 1e-9, "{p}: {off}");
+            } else {
+                // The free cable: its height above the midpoint at u.
+                let in_cable = world.base_from_cable.inverse() * (world.base_from_sensor() * p);
+                let (height_mm, _) = world.cable.height_and_slope(in_cable.x);
+                assert!((in_cable.y - height_mm).abs() < 1e-9, "{in_cable}");
+            }
+        }
+        // The jaws moved the cable: it steps at the pad's edge.
+        assert!(held.n_mm.abs() < world.grasp.unwrap().caught.n_mm.abs());
     }
 
     #[test]

@@ -26,6 +26,10 @@ pub fn raw_to_volts(raw: u16) -> f64 {
     f64::from(raw & ADC_MAX) * VOLTS_PER_COUNT
 }
 
+/// Half the pad's side, in pitches: the outer taxels sit 2 pitches from
+/// the centre and the silicone cap goes on half a pitch beyond them.
+pub const PAD_HALF_SIDE_PITCH: f64 = 2.5;
+
 /// x of column `col` (0-based) in the sensor frame, in mm.
 pub fn taxel_x_mm(col: usize, pitch_mm: f64) -> f64 {
     (col as f64 - 2.0) * pitch_mm

@@ -25,4 +25,7 @@ pub use fit::{
     CONTACT_THRESHOLD_V, Centroid, Direction, FitConfig, FitError, PAPER_PITCH_MM, Quadratic,
     WireFit, fit_wire,
 };
-pub use map::{ADC_MAX, MapError, TAXEL_COLS, TAXEL_COUNT, TAXEL_ROWS, TactileMap, raw_to_volts};
+pub use map::{
+    ADC_MAX, MapError, PAD_HALF_SIDE_PITCH, TAXEL_COLS, TAXEL_COUNT, TAXEL_ROWS, TactileMap,
+    raw_to_volts,
+};

@@ -10,6 +10,7 @@ use nalgebra::{
 
 use super::calibration::CameraModel;
 use super::spline::BSpline;
+use crate::perception::shape::{SHAPE_SPACING_MM, ShapePoint, resample};
 
 /// A plane in the base frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +28,9 @@ pub struct ImageToBase {
     pub cable_plane: PlaneInBase,
     /// The grasp frame's y points to this side (in the base frame).
     pub approach_from: Unit<Vector3<f64>>,
+    /// How well the calibration fitted the marker (RMS, pixels): an image
+    /// point's error beyond the pipeline's own.
+    pub reprojection_error_px: f64,
 }
 
 /// Rays nearer than this to parallel with the plane (cosine) meet it too
@@ -53,6 +57,37 @@ impl ImageToBase {
         }
         let t = (self.cable_plane.point_mm - origin).dot(&normal) / incidence;
         (t > 0.0 && t.is_finite()).then(|| origin + t * ray)
+    }
+
+    /// Millimetres a pixel spans at `point_in_base` (seen face on): its
+    /// depth in front of the camera over the focal length.
+    pub fn mm_per_px(&self, point_in_base: &Point3<f64>) -> f64 {
+        let depth_mm = (self.base_from_camera.inverse() * point_in_base).z;
+        let focal_px = 0.5 * (self.intrinsics.fx_px + self.intrinsics.fy_px);
+        depth_mm.abs() / focal_px
+    }
+
+    /// The cable's centre line in the base frame: the spline, about
+    /// `length_px` long, sampled about every pixel, placed on the plane and
+    /// taken every [`SHAPE_SPACING_MM`]; each point's σ is `sigma_px` (the
+    /// pipeline's centre line against the true one) and the calibration's
+    /// reprojection error, in quadrature, at the point's scale. Only what
+    /// the spline covers: what the pipeline found of the cable.
+    pub fn centre_line(&self, spline: &BSpline, length_px: f64, sigma_px: f64) -> Vec<ShapePoint> {
+        let count = length_px.max(1.0).ceil() as usize + 1;
+        let on_plane: Vec<Point3<f64>> = spline
+            .sample(count)
+            .into_iter()
+            .filter_map(|px| self.point_in_base(px))
+            .collect();
+        let image_sigma_px = sigma_px.hypot(self.reprojection_error_px);
+        resample(&on_plane, SHAPE_SPACING_MM)
+            .into_iter()
+            .map(|in_base_mm| ShapePoint {
+                in_base_mm,
+                sigma_mm: image_sigma_px * self.mm_per_px(&in_base_mm),
+            })
+            .collect()
     }
 
     /// The paper's grasp frame at s = 0.5 of the cable's spline, in the
@@ -104,6 +139,7 @@ mod tests {
                 normal: Vector3::y_axis(),
             },
             approach_from: Vector3::z_axis(),
+            reprojection_error_px: 0.3,
         }
     }
 
@@ -133,6 +169,27 @@ mod tests {
         // The plane behind the camera.
         to_base.cable_plane.point_mm = Point3::new(0.0, -500.0, 0.0);
         assert!(to_base.point_in_base([320.0, 240.0]).is_none());
+    }
+
+    #[test]
+    fn the_centre_line_lies_on_the_cable_with_sigma_at_its_depth() {
+        let to_base = image_to_base();
+        // A cable 100 mm long in the plane, 400 mm from the camera.
+        let start = Point3::new(400.0, 0.0, 260.0);
+        let points: Vec<[f64; 2]> = (0..=100)
+            .map(|i| project(&to_base, start + Vector3::new(f64::from(i), 0.0, 0.0)))
+            .collect();
+        let spline = BSpline::fit(&points, 6).unwrap();
+        let length_px = 100.0 * to_base.intrinsics.fx_px / 400.0;
+        let line = to_base.centre_line(&spline, length_px, 0.4);
+        assert_eq!(line.len(), 101);
+        // 0.4 px and 0.3 px make 0.5 px, of 400 / f mm each.
+        let sigma_mm = 0.5 * 400.0 / to_base.intrinsics.fx_px;
+        for (i, point) in line.iter().enumerate() {
+            let expected = start + Vector3::new(i as f64, 0.0, 0.0);
+            assert!((point.in_base_mm - expected).norm() < 0.05, "{point:?}");
+            assert!((point.sigma_mm - sigma_mm).abs() < 1e-9, "{point:?}");
+        }
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! other, whose middle (s = 0.5) is the grasp point and whose direction
 //! there comes from the points at s = 0.45 and s = 0.55.
 
-use nalgebra::DMatrix;
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// Length of cable, in pixels, per control point: fine enough to follow a
 /// bend of a few cable widths, coarse enough to smooth pixel staircases.
@@ -20,8 +20,11 @@ const SMOOTHING: f64 = 1e-6;
 pub struct BSpline {
     /// Polynomial degree (3, lower only when fitted to very few points).
     pub degree: usize,
-    /// Control points in image coordinates (x right, y down).
-    pub control_points_px: Vec<[f64; 2]>,
+    /// Control points in the units of the points fitted: image
+    /// coordinates (x right, y down, pixels) for a cable in an image,
+    /// millimetres in a plane for a fused shape.
+    #[serde(rename = "control_points_px")]
+    pub control_points: Vec<[f64; 2]>,
     /// Clamped knot vector on [0, 1], `control_points + degree + 1` long.
     pub knots: Vec<f64>,
 }
@@ -88,62 +91,56 @@ impl BSpline {
             .copied()
             .filter(|p| p[0].is_finite() && p[1].is_finite())
             .collect();
-        let mut u = arc_lengths_px(&finite);
+        let u = arc_lengths_px(&finite);
         let acc = u.last().copied().unwrap_or(0.0);
         if finite.len() < 2 || acc <= 0.0 {
             return None;
         }
-        for v in &mut u {
-            *v /= acc;
-        }
-        let m = finite.len();
-        let degree = 3.min(m - 1);
-        let n = control_points.clamp(degree + 1, (m / 2).max(degree + 1));
-        let interior = n - degree - 1;
-        let mut knots = vec![0.0; degree + 1];
-        knots.extend((1..=interior).map(|i| i as f64 / (interior + 1) as f64));
-        knots.extend(std::iter::repeat_n(1.0, degree + 1));
-
-        let mut ata = DMatrix::<f64>::zeros(n, n);
-        let mut atb = DMatrix::<f64>::zeros(n, 2);
-        for (p, &ui) in finite.iter().zip(&u) {
-            let span = find_span(&knots, degree, n, ui);
-            let b = basis(&knots, degree, span, ui);
-            let first = span - degree;
-            for (a, &ba) in b.iter().enumerate() {
-                for (c, &bc) in b.iter().enumerate() {
-                    ata[(first + a, first + c)] += ba * bc;
-                }
-                atb[(first + a, 0)] += ba * p[0];
-                atb[(first + a, 1)] += ba * p[1];
-            }
-        }
-        // Second-difference penalty, scaled to the data's weight.
-        let lambda = SMOOTHING * m as f64 / n as f64;
-        for i in 0..n.saturating_sub(2) {
-            let d = [1.0, -2.0, 1.0];
-            for a in 0..3 {
-                for c in 0..3 {
-                    ata[(i + a, i + c)] += lambda * d[a] * d[c];
-                }
-            }
-        }
-        let solution = ata.cholesky()?.solve(&atb);
-        let control_points_px = (0..n)
-            .map(|i| [solution[(i, 0)], solution[(i, 1)]])
+        let samples: Vec<Sample> = finite
+            .iter()
+            .zip(&u)
+            .map(|(&point, &u)| Sample {
+                point,
+                s: u / acc,
+                weight: 1.0,
+            })
             .collect();
-        let spline = BSpline {
-            degree,
-            control_points_px,
-            knots,
-        };
-        Some(spline)
+        least_squares(&samples, control_points, 0.0).map(|fit| fit.spline)
+    }
+
+    /// Weighted least-squares fit at parameters the caller chose (a fusion
+    /// of several sources, whose points interleave along the curve, cannot
+    /// take chord lengths): each sample counts `weight` times (1/σ² for
+    /// points of standard deviation σ). Samples with a parameter outside
+    /// [0, 1], a weight that is not positive, or anything not finite are
+    /// left out. `bending_weight` weighs the control points' squared second
+    /// differences against the samples (in the weights' units), on top of
+    /// the light penalty every fit has: a prior on how much the curve
+    /// bends, which holds it where samples are few. Otherwise as
+    /// [`BSpline::fit`]; with the fit comes what gives the curve's standard
+    /// deviation.
+    pub fn fit_weighted(
+        samples: &[Sample],
+        control_points: usize,
+        bending_weight: f64,
+    ) -> Option<WeightedFit> {
+        let kept: Vec<Sample> = samples
+            .iter()
+            .copied()
+            .filter(|sample| {
+                sample.point.iter().all(|v| v.is_finite())
+                    && (0.0..=1.0).contains(&sample.s)
+                    && sample.weight.is_finite()
+                    && sample.weight > 0.0
+            })
+            .collect();
+        least_squares(&kept, control_points, bending_weight.max(0.0))
     }
 
     /// The curve's point at `s` (clamped to [0, 1]), by de Boor's
     /// algorithm.
     pub fn point(&self, s: f64) -> [f64; 2] {
-        let n = self.control_points_px.len();
+        let n = self.control_points.len();
         if n == 0 || self.knots.len() != n + self.degree + 1 {
             return [f64::NAN, f64::NAN];
         }
@@ -152,7 +149,7 @@ impl BSpline {
         let b = basis(&self.knots, self.degree, span, s);
         let first = span - self.degree;
         b.iter().enumerate().fold([0.0, 0.0], |acc, (k, &w)| {
-            let c = self.control_points_px[first + k];
+            let c = self.control_points[first + k];
             [acc[0] + w * c[0], acc[1] + w * c[1]]
         })
     }
@@ -175,6 +172,103 @@ impl BSpline {
         let b = self.point(0.55);
         (b[1] - a[1]).atan2(b[0] - a[0])
     }
+}
+
+/// A point to fit at its parameter, with its weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub point: [f64; 2],
+    /// Where on the curve, in [0, 1].
+    pub s: f64,
+    pub weight: f64,
+}
+
+/// A weighted fit and its normal equations, which give the curve's
+/// standard deviation where it was fitted.
+#[derive(Clone, Debug)]
+pub struct WeightedFit {
+    pub spline: BSpline,
+    /// The factored normal matrix (data and smoothing), the inverse of the
+    /// control points' covariance when the weights are 1/σ².
+    normal: Cholesky<f64, Dyn>,
+}
+
+impl WeightedFit {
+    /// The standard deviation of the curve's point at `s` (each
+    /// coordinate), from the weights taken as 1/σ²: small where many sure
+    /// points pull, large across a stretch only the smoothing holds.
+    pub fn sigma(&self, s: f64) -> f64 {
+        let spline = &self.spline;
+        let n = spline.control_points.len();
+        let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
+        let span = find_span(&spline.knots, spline.degree, n, s);
+        let mut phi = DVector::<f64>::zeros(n);
+        for (k, b) in basis(&spline.knots, spline.degree, span, s)
+            .into_iter()
+            .enumerate()
+        {
+            phi[span - spline.degree + k] = b;
+        }
+        phi.dot(&self.normal.solve(&phi)).max(0.0).sqrt()
+    }
+}
+
+/// The least-squares B-spline through `samples` at their parameters, with
+/// uniform interior knots and a second-difference penalty: a light one,
+/// and `bending_weight` more.
+fn least_squares(
+    samples: &[Sample],
+    control_points: usize,
+    bending_weight: f64,
+) -> Option<WeightedFit> {
+    let m = samples.len();
+    if m < 2 {
+        return None;
+    }
+    let degree = 3.min(m - 1);
+    let n = control_points.clamp(degree + 1, (m / 2).max(degree + 1));
+    let interior = n - degree - 1;
+    let mut knots = vec![0.0; degree + 1];
+    knots.extend((1..=interior).map(|i| i as f64 / (interior + 1) as f64));
+    knots.extend(std::iter::repeat_n(1.0, degree + 1));
+
+    let mut ata = DMatrix::<f64>::zeros(n, n);
+    let mut atb = DMatrix::<f64>::zeros(n, 2);
+    let mut total_weight = 0.0;
+    for sample in samples {
+        let (p, w) = (sample.point, sample.weight);
+        total_weight += w;
+        let span = find_span(&knots, degree, n, sample.s);
+        let b = basis(&knots, degree, span, sample.s);
+        let first = span - degree;
+        for (a, &ba) in b.iter().enumerate() {
+            for (c, &bc) in b.iter().enumerate() {
+                ata[(first + a, first + c)] += w * ba * bc;
+            }
+            atb[(first + a, 0)] += w * ba * p[0];
+            atb[(first + a, 1)] += w * ba * p[1];
+        }
+    }
+    // Second-difference penalty, the light one scaled to the data's weight.
+    let lambda = SMOOTHING * total_weight / n as f64 + bending_weight;
+    for i in 0..n.saturating_sub(2) {
+        let d = [1.0, -2.0, 1.0];
+        for a in 0..3 {
+            for c in 0..3 {
+                ata[(i + a, i + c)] += lambda * d[a] * d[c];
+            }
+        }
+    }
+    let normal = ata.cholesky()?;
+    let solution = normal.solve(&atb);
+    let spline = BSpline {
+        degree,
+        control_points: (0..n)
+            .map(|i| [solution[(i, 0)], solution[(i, 1)]])
+            .collect(),
+        knots,
+    };
+    Some(WeightedFit { spline, normal })
 }
 
 /// The largest distance of `points_px` from the chord joining their ends:
@@ -294,6 +388,80 @@ mod tests {
         assert_eq!(chord_sagitta_px(&[]), 0.0);
         // A closed loop: the distance from its ends.
         assert_eq!(chord_sagitta_px(&[[1.0, 1.0], [4.0, 5.0], [1.0, 1.0]]), 5.0);
+    }
+
+    #[test]
+    fn unit_weights_at_chord_lengths_give_the_plain_fit() {
+        let pts: Vec<[f64; 2]> = (0..=60)
+            .map(|i| {
+                let t = i as f64 / 60.0;
+                [100.0 * t, 20.0 * (3.0 * t).sin()]
+            })
+            .collect();
+        let plain = BSpline::fit(&pts, 6).unwrap();
+        let lengths = arc_lengths_px(&pts);
+        let total = lengths[lengths.len() - 1];
+        let samples: Vec<Sample> = pts
+            .iter()
+            .zip(&lengths)
+            .map(|(&point, &u)| Sample {
+                point,
+                s: u / total,
+                weight: 1.0,
+            })
+            .collect();
+        let weighted = BSpline::fit_weighted(&samples, 6, 0.0).unwrap();
+        assert_eq!(weighted.spline, plain);
+    }
+
+    /// Samples along x in [0, 100] at `y`, s = x / 100.
+    fn level(y: f64, weight: f64, xs: impl Iterator<Item = f64>) -> Vec<Sample> {
+        xs.map(|x| Sample {
+            point: [x, y],
+            s: x / 100.0,
+            weight,
+        })
+        .collect()
+    }
+
+    #[test]
+    fn the_heavier_points_pull_the_curve_by_their_weight() {
+        // Two interleaved rows, y = 0 at weight 1 and y = 1 at weight 3:
+        // the weighted mean, 0.75, away from the ends (where one row's
+        // last point has the end to itself).
+        let mut samples = level(0.0, 1.0, (0..=50).map(|i| 2.0 * i as f64));
+        samples.extend(level(1.0, 3.0, (0..50).map(|i| 2.0 * i as f64 + 1.0)));
+        let fit = BSpline::fit_weighted(&samples, 8, 0.0).unwrap();
+        for k in 1..10 {
+            let p = fit.spline.point(f64::from(k) / 10.0);
+            assert!((p[1] - 0.75).abs() < 0.02, "{p:?}");
+        }
+        // Points of σ = 1 at weight 1: 101 of them leave about 1/√(101/8)
+        // on the curve, far less than one point's.
+        let sigma = fit.sigma(0.5);
+        assert!(sigma > 0.05 && sigma < 0.5, "{sigma}");
+    }
+
+    #[test]
+    fn the_curve_is_sure_where_points_are_and_unsure_across_a_gap() {
+        // Points on y = 0 but for x in (30, 70).
+        let xs = (0..=100)
+            .map(f64::from)
+            .filter(|x| !(30.0..=70.0).contains(x));
+        let fit = BSpline::fit_weighted(&level(0.0, 1.0, xs), 10, 0.0).unwrap();
+        let (seen, hidden) = (fit.sigma(0.15), fit.sigma(0.5));
+        assert!(hidden > 3.0 * seen, "seen {seen}, hidden {hidden}");
+        // The smoothing carries the curve straight across.
+        assert!(fit.spline.point(0.5)[1].abs() < 1e-3);
+        // Nothing usable: no curve.
+        let bad = [Sample {
+            point: [f64::NAN, 0.0],
+            s: 0.5,
+            weight: 1.0,
+        }; 4];
+        assert!(BSpline::fit_weighted(&bad, 4, 0.0).is_none());
+        let outside = level(0.0, 1.0, [120.0, 150.0, 180.0].into_iter());
+        assert!(BSpline::fit_weighted(&outside, 4, 0.0).is_none());
     }
 
     proptest! {

@@ -178,7 +178,7 @@ impl Pipeline {
             // A B-spline's points move with its control points under an
             // affine map: the spline fitted in working pixels becomes the
             // image's by moving them.
-            for c in &mut spline.control_points_px {
+            for c in &mut spline.control_points {
                 *c = to_image.point(*c);
             }
             let samples_px: Vec<_> = samples_px.into_iter().map(|p| to_image.point(p)).collect();
