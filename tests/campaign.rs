@@ -491,3 +491,68 @@ fn a_journal_that_is_no_regular_file_is_refused_unread() {
         assert!(!err.contains("already holds trials"), "{err}");
     }
 }
+
+/// The occlusion campaign, `trials` per policy, as JSON without the wall
+/// clock's figures.
+fn occlusion_summary(out: &Path, threads: &str) -> serde_json::Value {
+    let output = campaign(&[
+        "tasks/occluded-camera-campaign.toml",
+        "--trials",
+        "1",
+        "--threads",
+        threads,
+        "--no-record",
+        "--json",
+        "--out",
+        common::text(out),
+    ]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let mut summary: serde_json::Value = serde_json::from_slice(&output.stdout).expect("JSON");
+    for policy in summary["policies"].as_array_mut().expect("policies") {
+        policy
+            .as_object_mut()
+            .expect("a policy")
+            .remove("compute_time_per_trial_s");
+    }
+    summary
+}
+
+#[test]
+fn the_occlusion_campaign_is_reproducible_for_a_seed_and_compares_the_senses() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let one = occlusion_summary(&dir.path().join("one"), "1");
+    let two = occlusion_summary(&dir.path().join("two"), "2");
+    assert_eq!(
+        one, two,
+        "the same seed gives the same summary on any thread count"
+    );
+    let policy = |name: &str| {
+        one["policies"]
+            .as_array()
+            .expect("policies")
+            .iter()
+            .find(|p| p["policy"] == name)
+            .unwrap_or_else(|| panic!("policy {name}"))
+            .clone()
+    };
+    // With the cable wholly hidden the camera alone finds no cable, touch
+    // searches, and both fall back to the search.
+    assert_eq!(policy("vision 100 %")["success"]["successes"], 0);
+    assert_eq!(policy("touch 100 %")["success"]["successes"], 1);
+    assert_eq!(policy("both 100 %")["success"]["successes"], 1);
+    assert!(policy("both 100 %")["search_moves_per_trial"]["mean"].as_f64() >= Some(1.0));
+    // With the camera seeing, the fused shape lies on the pad nearer the
+    // true cable than the vision shape does.
+    let shapes = &policy("both 30 %")["shape_errors"];
+    let pad = |shape: &str| {
+        shapes[shape]["grasped_mm"]["mean"]
+            .as_f64()
+            .expect("a mean")
+    };
+    assert!(pad("fused") < pad("vision"), "{shapes}");
+}

@@ -6,6 +6,8 @@ use serde::Serialize;
 use super::stats::{Rate, Summary};
 use super::trial::{TrialEntry, TrialOutcome};
 use crate::geometry::PoseError;
+use crate::perception::shape::{Distances, StretchErrors};
+use crate::record::ShapeErrors;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct CampaignSummary {
@@ -30,10 +32,58 @@ pub struct PolicySummary {
     /// searched; left out of the JSON when none did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub search_moves_per_trial: Option<Summary>,
+    /// How far each shape of the cable lay from the true one at the first
+    /// grasp that held it; left out of the JSON when no trial measured it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shape_errors: Option<ShapeErrorSummary>,
     /// Duration of a trial on the cell's clock (simulated time).
     pub cell_time_per_trial_s: Option<Summary>,
     /// Computation per trial (wall clock, not reproducible).
     pub compute_time_per_trial_s: Option<Summary>,
+}
+
+/// The mean distance of each shape of the cable from the true one, over
+/// the grasped stretch (the pad) and beyond it, across trials.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShapeErrorSummary {
+    /// The length measured beyond each end of the pad.
+    pub beyond_mm: f64,
+    pub vision: StretchSummary,
+    pub tactile_quadratic: StretchSummary,
+    pub fused: StretchSummary,
+}
+
+/// A shape's mean distance from the true cable, in mm, over the trials
+/// that had it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StretchSummary {
+    pub grasped_mm: Option<Summary>,
+    pub beyond_mm: Option<Summary>,
+}
+
+impl ShapeErrorSummary {
+    fn of(trials: &[&ShapeErrors]) -> Option<Self> {
+        let first = trials.first()?;
+        let stretch = |shape: fn(&ShapeErrors) -> Option<StretchErrors>| {
+            let means = |part: fn(&StretchErrors) -> Option<Distances>| -> Vec<f64> {
+                trials
+                    .iter()
+                    .filter_map(|t| part(&shape(t)?))
+                    .map(|d| d.mean_mm)
+                    .collect()
+            };
+            StretchSummary {
+                grasped_mm: Summary::of(&means(|s| s.grasped)),
+                beyond_mm: Summary::of(&means(|s| s.beyond)),
+            }
+        };
+        Some(Self {
+            beyond_mm: first.beyond_mm,
+            vision: stretch(|t| t.vision),
+            tactile_quadratic: stretch(|t| t.tactile_quadratic),
+            fused: stretch(|t| t.fused),
+        })
+    }
 }
 
 /// |n| and |α| over the trials that reached a stage.
@@ -120,6 +170,10 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
         .iter()
         .filter_map(|e| e.search_moves.map(f64::from))
         .collect();
+    let shapes: Vec<&ShapeErrors> = entries
+        .iter()
+        .filter_map(|e| e.shape_errors.as_ref())
+        .collect();
     let cell_time: Vec<f64> = entries.iter().map(|e| e.cell_time_s).collect();
     let compute_time: Vec<f64> = entries.iter().map(|e| e.compute_time_s).collect();
     PolicySummary {
@@ -134,6 +188,7 @@ fn policy_summary(policy: &str, entries: &[&TrialEntry]) -> PolicySummary {
             .count(),
         regrasps_per_trial: Summary::of(&regrasps),
         search_moves_per_trial: Summary::of(&search_moves),
+        shape_errors: ShapeErrorSummary::of(&shapes),
         cell_time_per_trial_s: Summary::of(&cell_time),
         compute_time_per_trial_s: Summary::of(&compute_time),
     }
@@ -214,6 +269,34 @@ fn render_block(policies: &[PolicySummary]) -> String {
     row("regrasps per trial".into(), &|p| {
         cell(p.regrasps_per_trial, 1.0, 2)
     });
+    if let Some(beyond_mm) = policies
+        .iter()
+        .find_map(|p| Some(p.shape_errors.as_ref()?.beyond_mm))
+    {
+        // The pad's quadratic fit stands for touch: the paper's curve.
+        type Part = fn(&ShapeErrorSummary) -> StretchSummary;
+        let shapes: [(&str, Part); 3] = [
+            ("vision", |s| s.vision),
+            ("touch", |s| s.tactile_quadratic),
+            ("fused", |s| s.fused),
+        ];
+        for (name, part) in shapes {
+            row(format!("{name} shape, pad mm"), &|p| {
+                cell(
+                    p.shape_errors.as_ref().and_then(|s| part(s).grasped_mm),
+                    1.0,
+                    3,
+                )
+            });
+            row(format!("{name} shape, ±{beyond_mm:.0} mm"), &|p| {
+                cell(
+                    p.shape_errors.as_ref().and_then(|s| part(s).beyond_mm),
+                    1.0,
+                    3,
+                )
+            });
+        }
+    }
     if policies.iter().any(|p| p.search_moves_per_trial.is_some()) {
         row("search moves per trial".into(), &|p| {
             cell(p.search_moves_per_trial, 1.0, 2)
@@ -287,6 +370,7 @@ mod tests {
             compute_time_s: 0.001,
             recording: None,
             search_moves: None,
+            shape_errors: None,
         }
     }
 

@@ -15,7 +15,7 @@ use crate::hw::arm::config::ArmBackend;
 use crate::hw::camera::config::{CameraBackend, OcclusionConfig};
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
-use crate::record::RunOutcome;
+use crate::record::{RunOutcome, ShapeErrors};
 use crate::schema::FrameConfig;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
@@ -124,6 +124,10 @@ pub struct TrialEntry {
     /// then begins at the first that felt the cable).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub search_moves: Option<u32>,
+    /// How far the shapes of the cable at the first grasp that held it lay
+    /// from the true cable (simulated cells).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape_errors: Option<ShapeErrors>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -236,6 +240,7 @@ pub fn run_trial(
                 compute_time_s: started.elapsed().as_secs_f64(),
                 recording: None,
                 search_moves: None,
+                shape_errors: None,
             };
         }
     };
@@ -296,6 +301,7 @@ pub fn run_trial(
         compute_time_s: started.elapsed().as_secs_f64(),
         recording,
         search_moves: record.touch_only.as_ref().map(|t| t.search_moves),
+        shape_errors: record.grasps.iter().find_map(|g| g.shapes.as_ref()?.errors),
     }
 }
 
