@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mcap::read::Options;
+use mcap::sans_io::{LinearReaderOptions, MessageReadEvent, MessageReader};
 use serde::de::DeserializeOwned;
 
 use super::RecordingError;
@@ -32,13 +32,26 @@ impl Recording {
             source,
         })?;
         let complete = mcap::read::footer(&bytes).is_ok();
-        let stream = mcap::MessageStream::new_with_options(&bytes, Options::IgnoreEndMagic.into())
-            .map_err(RecordingError::mcap(path))?;
+        // `mcap::MessageStream` sets no limit on a record's length, and a
+        // corrupt length near 2^64 overflows inside the mcap crate (a
+        // panic, found by fuzzing): no record is longer than the file.
+        let mut reader = MessageReader::new_with_options(
+            LinearReaderOptions::default()
+                .with_skip_end_magic(true)
+                .with_record_length_limit(bytes.len()),
+        );
+        let mut unread = &bytes[..];
         let mut messages = Vec::new();
         let mut truncated = None;
-        for message in stream {
-            match message {
-                Ok(message) => messages.push(RecordedMessage {
+        while let Some(event) = reader.next_event() {
+            match event {
+                Ok(MessageReadEvent::ReadRequest(wanted)) => {
+                    let n = wanted.min(unread.len());
+                    reader.insert(n).copy_from_slice(&unread[..n]);
+                    reader.notify_read(n);
+                    unread = &unread[n..];
+                }
+                Ok(MessageReadEvent::Message(message)) => messages.push(RecordedMessage {
                     topic: message.channel.topic.clone(),
                     log_time_ns: message.log_time,
                     data: message.data.into_owned(),
