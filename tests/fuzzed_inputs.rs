@@ -3,7 +3,10 @@
 //! language's (a stack overflow) is tested beside it, in
 //! `orchestrator/breakpoint/condition.rs`.
 
+use cablecell::campaign::journal::{Journal, read};
 use cablecell::recording::Recording;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// `recording`: a record claiming 2^64 - 1 bytes overflowed inside the
 /// mcap crate, a panic of `cablecell replay`. The recording now ends there,
@@ -27,4 +30,29 @@ fn a_record_longer_than_the_file_ends_the_recording_there() {
         .truncated
         .expect("the file is cut at the long record");
     assert!(why.contains("exceeds limit"), "{why}");
+}
+
+/// `journal`: serde_json read some floats one unit in the last place off
+/// (0.21937721680296174, an angle's error as a trial entry holds it), so
+/// a resumed campaign's entries were not the ones it had written. Every
+/// finite float now reads back bit for bit (10 000 more drawn with seed 1,
+/// half of them any bit pattern, half of them of a run's scale).
+#[test]
+fn a_journal_reads_back_every_float_as_written() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let mut values = vec![0.21937721680296174];
+    for _ in 0..5_000 {
+        values.push(f64::from_bits(rng.random()));
+        values.push(rng.random_range(-10.0..10.0));
+    }
+    values.retain(|v: &f64| v.is_finite());
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("trials.jsonl");
+    Journal::create(&path)
+        .and_then(|mut journal| journal.append(&values))
+        .expect("append");
+    let recovered = read::<Vec<f64>>(&path).expect("read back");
+    let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(recovered.entries.len(), 1);
+    assert_eq!(bits(&recovered.entries[0]), bits(&values));
 }
