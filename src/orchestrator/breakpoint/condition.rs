@@ -25,7 +25,19 @@ pub enum ConditionError {
         expected: &'static str,
         found: &'static str,
     },
+    /// More than [`MAX_TOKENS`] numbers, names, operators and
+    /// parentheses, from `column` on: split the condition.
+    #[error(
+        "column {column}: a condition has at most {MAX_TOKENS} numbers, names, operators and parentheses"
+    )]
+    TooLong { column: usize },
 }
+
+/// The most tokens a condition may have. Parsing, evaluating and dropping
+/// a condition recurse once per nesting level or operator, so a pasted line
+/// of thousands of parentheses would otherwise overflow the stack (found
+/// with the fuzz target); a condition a person writes has a few dozen.
+pub const MAX_TOKENS: usize = 256;
 
 /// A parsed condition; evaluating it cannot fail, only find a value
 /// missing (and then it is false).
@@ -269,6 +281,9 @@ fn tokenize(text: &str) -> Result<Vec<Token>, ConditionError> {
                 found: format!("`{c}`"),
             });
         };
+        if tokens.len() == MAX_TOKENS {
+            return Err(ConditionError::TooLong { column });
+        }
         tokens.push(Token {
             kind,
             column,
@@ -536,6 +551,28 @@ mod tests {
         assert!(!holds("true_n_mm > 0", &[]));
         assert!(!holds("not (true_n_mm > 0)", &[]));
         assert!(holds("true_n_mm > 0 or grasps == 1", &[("grasps", 1.0)]));
+    }
+
+    #[test]
+    fn a_condition_too_long_to_parse_safely_is_refused_where_it_becomes_so() {
+        // Nesting as deep as the limit allows parses (on a test thread's
+        // small stack, unoptimised).
+        let depth = (MAX_TOKENS - 3) / 2;
+        let deepest = format!("{}n_mm > 1{}", "(".repeat(depth), ")".repeat(depth));
+        assert!(holds(&deepest, &[("n_mm", 2.0)]));
+        // 20 000 nested parentheses overflowed the stack before the limit.
+        let deep = format!("{}n_mm > 1{}", "(".repeat(20_000), ")".repeat(20_000));
+        assert_eq!(
+            Condition::parse(&deep),
+            Err(ConditionError::TooLong {
+                column: MAX_TOKENS + 1
+            })
+        );
+        let chain = format!("1{} > 0", " + 1".repeat(MAX_TOKENS));
+        assert!(matches!(
+            Condition::parse(&chain),
+            Err(ConditionError::TooLong { .. })
+        ));
     }
 
     #[test]

@@ -13,6 +13,6 @@ mod condition;
 mod registry;
 mod values;
 
-pub use condition::{Condition, ConditionError};
+pub use condition::{Condition, ConditionError, MAX_TOKENS};
 pub use registry::{Breakpoint, BreakpointError, Breakpoints};
 pub use values::RunValues;
