@@ -1,6 +1,8 @@
 //! Summary statistics of a campaign: how a measured value spreads over the
 //! trials, and how sure a success rate is given the number of trials.
 
+use schemars::JsonSchema;
+
 /// z for a two-sided 95 % interval: the 0.975 quantile of the standard
 /// normal distribution.
 const Z_95: f64 = 1.959963984540054;
@@ -13,7 +15,7 @@ const Z_95: f64 = 1.959963984540054;
 /// x₀ ≤ … ≤ xₙ₋₁ and a probability p, h = (n − 1)·p and
 /// Q(p) = x⌊h⌋ + (h − ⌊h⌋)·(x⌊h⌋₊₁ − x⌊h⌋). Reports can then be checked
 /// against either tool.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, JsonSchema)]
 pub struct Summary {
     pub count: usize,
     pub mean: f64,
@@ -95,7 +97,7 @@ fn quantile_type7(sorted: &[f64], p: f64) -> f64 {
 /// Wilson rather than the normal approximation p ± z·√(p(1−p)/n): the latter
 /// collapses to a zero-width interval at 0/n and n/n and leaves [0, 1] for
 /// small n, which is exactly where a short campaign lands.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, JsonSchema)]
 pub struct Rate {
     pub successes: usize,
     pub trials: usize,

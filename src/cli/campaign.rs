@@ -5,9 +5,8 @@ use std::path::Path;
 use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
 use cablecell::campaign::summary::{render_table, summarise};
 use cablecell::campaign::trial::TrialEntry;
-use indicatif::{ProgressBar, ProgressStyle};
-
-use super::Status;
+use super::output::{out, outln};
+use super::{Status, progress};
 
 pub fn campaign(
     path: &Path,
@@ -24,10 +23,7 @@ pub fn campaign(
         }
     };
     let policies = campaign.policy_names();
-    let bar = ProgressBar::new((campaign.trials * policies.len()) as u64).with_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} trials {elapsed}  {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = progress::bar(campaign.trials * policies.len(), "trials");
     let mut means = RunningMeans::new(&policies);
     let result = campaign.run(resume, threads, |entry| {
         means.add(entry);
@@ -56,18 +52,12 @@ pub fn campaign(
         &entries,
     );
     if json {
-        match serde_json::to_string_pretty(&summary) {
-            Ok(text) => println!("{text}"),
-            Err(error) => {
-                eprintln!("error: cannot write the summary as JSON: {error}");
-                return Status::OutputFailed;
-            }
-        }
+        return super::json::print(&summary);
     } else {
-        print!("{}", render_table(&summary));
-        println!("trials recorded in {}", campaign.journal_path().display());
+        out!("{}", render_table(&summary));
+        outln!("trials recorded in {}", campaign.journal_path().display());
         if campaign.record {
-            println!(
+            outln!(
                 "each trial's recording in {}",
                 campaign.recordings_folder().display()
             );

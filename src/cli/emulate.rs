@@ -18,7 +18,9 @@ use super::Status;
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
 pub enum Emulated {
+    /// The Schunk PG70 gripper, speaking SMP.
     Pg70,
+    /// The tactile finger's microcontroller, with the simulated pad.
     Tactile,
 }
 

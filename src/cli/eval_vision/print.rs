@@ -7,25 +7,10 @@ use cablecell::campaign::stats::Summary;
 use cablecell::perception::vision::eval::{
     CENTRELINE_NEAR_PX, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
 };
-use serde::Serialize;
 
-use crate::cli::Status;
 
 use super::score::{found_length_labelled, labelled_length_found};
 use super::{LengthShare, Report};
-
-pub(super) fn print_json(value: &impl Serialize) -> Status {
-    match serde_json::to_string_pretty(value) {
-        Ok(text) => {
-            println!("{text}");
-            Status::Success
-        }
-        Err(error) => {
-            eprintln!("error: cannot write the evaluation as JSON: {error}");
-            Status::OutputFailed
-        }
-    }
-}
 
 /// Images whose share is lower than this are named, lowest first.
 const LOW_LENGTH_SHARE: f64 = 0.9;

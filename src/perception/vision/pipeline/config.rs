@@ -1,6 +1,7 @@
 //! What the pipeline is asked to do: how the mask is made, how it is
 //! split into cables, and the sizes and lengths that judge what is found.
 
+use schemars::JsonSchema;
 use opencv::core::Rect;
 
 use crate::perception::vision::superpixels;
@@ -10,7 +11,7 @@ use {
 };
 
 /// How the cables' mask is made.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum MaskMethod {
     /// The classical threshold when the background is plain and its mask
@@ -24,7 +25,7 @@ pub enum MaskMethod {
 }
 
 /// How the mask is split into cables.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum InstanceMethod {
     /// Skeleton graph, its branches paired at junctions by least bending

@@ -1,6 +1,7 @@
 //! What the pipeline finds: the cables, each in the image's pixels, and
 //! how it found them.
 
+use schemars::JsonSchema;
 use opencv::core::Mat;
 
 use super::config::MaskMethod;
@@ -11,7 +12,7 @@ use {super::config::VisionConfig, crate::perception::vision::mask};
 
 /// One cable found in the image, in full-image pixel coordinates (x right,
 /// y down), whatever the region of interest.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, JsonSchema)]
 pub struct CableInstance {
     /// The cable's model, s = 0 at one end (the one with the smaller x) and
     /// s = 1 at the other.
