@@ -257,7 +257,7 @@ impl Figure for CampaignFigure {
                 width: 2,
             },
             format!(
-                "the paper's means: {} mm, {} rad at the trial grasp; {} mm, {} rad after its regrasp",
+                "the paper's means: {:.1} mm, {:.2} rad at the trial grasp; {:.1} mm, {:.2} rad after its regrasp",
                 PAPER_TRIAL_GRASP.0, PAPER_TRIAL_GRASP.1, PAPER_AFTER_REGRASP.0, PAPER_AFTER_REGRASP.1
             ),
         ));
