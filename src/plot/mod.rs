@@ -248,6 +248,9 @@ pub fn chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
+/// A part of a figure, in pixels.
+pub type Area<DB> = DrawingArea<DB, Shift>;
+
 /// `area` below `title`, split into the chart's part on the left, whose
 /// plotting area [`chart`] makes square, and a column for the legend on
 /// the right: a figure in the pad's plane with equal x and y ranges then
@@ -255,7 +258,7 @@ pub fn chart<'a, DB: DrawingBackend>(
 pub fn titled_square<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     title: &str,
-) -> Result<(DrawingArea<DB, Shift>, DrawingArea<DB, Shift>), String> {
+) -> Result<(Area<DB>, Area<DB>), String> {
     let below = area
         .titled(title, (FONT, TITLE_SIZE).into_font())
         .map_err(drawing_error)?;

@@ -161,7 +161,7 @@ pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), S
             record.task, record.seed
         );
         let truth = grasp.truth.as_ref().map(|t| t.line);
-        TactileFigure::new(grasp.map.clone(), &fit_config, truth, title)
+        TactileFigure::new(grasp.map, &fit_config, truth, title)
             .and_then(|figure| save(&figure, file))
             .map_err(|e| e.to_string())?;
         println!("drew the map in {}", file.display());
