@@ -135,8 +135,8 @@ pub(super) const COMMANDS: [Spec; 16] = [
     Spec {
         name: "show",
         aliases: &[],
-        args: "tactile|pose|params",
-        help: "the last tactile map, the arm's pose, the task's parameters",
+        args: "tactile [FILE]|pose|params",
+        help: "the last tactile map (with FILE.png|.svg also drawn there, Fig. 7), the arm's pose, the task's parameters",
         completes: Completes::Topic,
         run: show,
     },
@@ -192,20 +192,66 @@ pub(super) fn find(name: &str) -> Option<&'static Spec> {
         .find(|spec| spec.name == name || spec.aliases.contains(&name))
 }
 
-/// What `show` shows of a topic.
-type Show = fn(&mut Loaded) -> Result<(), String>;
+/// What `show` shows of a topic, given the words after the topic.
+type Show = fn(&mut Loaded, &[&str]) -> Result<(), String>;
+
+/// A `show` topic: its name, its arguments as `help` shows them (empty if
+/// it takes none), what it shows.
+pub(super) struct ShowTopic {
+    pub(super) name: &'static str,
+    args: &'static str,
+    show: Show,
+}
 
 /// The topics of `show`, in the order `help` lists them.
-pub(super) const SHOW_TOPICS: [(&str, Show); 3] = [
-    ("tactile", |loaded| show_tactile(loaded)),
-    ("pose", show_pose),
-    ("params", |loaded| {
-        for (name, value) in loaded.params.list() {
-            println!("{name} = {value}");
-        }
-        Ok(())
-    }),
+pub(super) const SHOW_TOPICS: [ShowTopic; 3] = [
+    ShowTopic {
+        name: "tactile",
+        args: "[FILE]",
+        show: |loaded, args| match args {
+            [] => show_tactile(loaded, None),
+            [file] => show_tactile(loaded, Some(Path::new(file))),
+            _ => Err("usage: show tactile [FILE.png|FILE.svg]".into()),
+        },
+    },
+    ShowTopic {
+        name: "pose",
+        args: "",
+        show: |loaded, _| show_pose(loaded),
+    },
+    ShowTopic {
+        name: "params",
+        args: "",
+        show: |loaded, _| {
+            for (name, value) in loaded.params.list() {
+                println!("{name} = {value}");
+            }
+            Ok(())
+        },
+    },
 ];
+
+impl ShowTopic {
+    /// Whether its argument is a file name, for completion.
+    pub(super) fn takes_file(&self) -> bool {
+        self.args == "[FILE]"
+    }
+}
+
+/// "tactile [FILE]|pose|params": the topics with their arguments.
+fn show_usage() -> String {
+    let topics: Vec<String> = SHOW_TOPICS
+        .iter()
+        .map(|t| {
+            if t.args.is_empty() {
+                t.name.to_owned()
+            } else {
+                format!("{} {}", t.name, t.args)
+            }
+        })
+        .collect();
+    topics.join("|")
+}
 
 /// Runs one line: its first word names the command, the rest are its
 /// arguments.
@@ -355,14 +401,17 @@ fn state(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
 
 fn show(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     let topic = match args {
-        [topic] => SHOW_TOPICS.iter().find(|(name, _)| name == topic),
-        _ => None,
+        [name, rest @ ..] => SHOW_TOPICS
+            .iter()
+            .find(|t| t.name == *name)
+            .filter(|t| !t.args.is_empty() || rest.is_empty())
+            .map(|t| (t, rest)),
+        [] => None,
     };
-    let Some((_, show)) = topic else {
-        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
-        return Err(format!("usage: show {}", topics.join("|")));
+    let Some((topic, rest)) = topic else {
+        return Err(format!("usage: show {}", show_usage()));
     };
-    show(session.loaded()?)?;
+    (topic.show)(session.loaded()?, rest)?;
     Ok(Flow::Go)
 }
 
@@ -449,11 +498,7 @@ mod tests {
         }
         assert!(find("frobnicate").is_none());
         // `help` shows the topics `show` takes.
-        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
-        assert_eq!(
-            find("show").map(|s| s.args),
-            Some(topics.join("|").as_str())
-        );
+        assert_eq!(find("show").map(|s| s.args), Some(show_usage().as_str()));
         assert_eq!(and_list(["s", "c", "b"].into_iter()), "s, c and b");
     }
 }

@@ -1,8 +1,12 @@
 //! What the REPL shows of a run: its state and the next command, the arm's
 //! pose, the latest tactile map with its fit.
 
+use std::path::Path;
+
 use cablecell::orchestrator::{Command, Runner};
 use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS};
+use cablecell::plot::save;
+use cablecell::plot::tactile::TactileFigure;
 use cablecell::record::{GraspRecord, RunRecord};
 
 use super::super::run::{attempt_name, print_outcome, print_transition};
@@ -103,11 +107,14 @@ fn latest_grasp(record: &RunRecord) -> Option<(String, &GraspRecord)> {
     Some((name, grasp))
 }
 
-pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
+/// The latest tactile map with its fit, as text; with `file`, also drawn
+/// there as the paper's Fig. 7 (`cablecell plot tactile`'s figure).
+pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), String> {
     let record = loaded.driver.runner().record();
     let (name, grasp) = latest_grasp(record)
         .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
-    let pitch_mm = loaded.driver.runner().plan().fit.pitch_mm;
+    let fit_config = loaded.driver.runner().plan().fit;
+    let pitch_mm = fit_config.pitch_mm;
     let line = grasp.fit.as_ref().map(Estimate::line);
     let centroids: Vec<(f64, f64)> = match &grasp.fit {
         Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
@@ -147,6 +154,17 @@ pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
             "true line:            n {:+.3} mm, α {:+.4} rad",
             truth.line.n_mm, truth.line.alpha_rad
         );
+    }
+    if let Some(file) = file {
+        let title = format!(
+            "Tactile map at the {name}, {} seed {}",
+            record.task, record.seed
+        );
+        let truth = grasp.truth.as_ref().map(|t| t.line);
+        TactileFigure::new(grasp.map, &fit_config, truth, title)
+            .and_then(|figure| save(&figure, file))
+            .map_err(|e| e.to_string())?;
+        println!("drew the map in {}", file.display());
     }
     Ok(())
 }
