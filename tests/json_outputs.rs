@@ -73,7 +73,10 @@ fn a_closed_pipe_ends_nothing_with_a_panic() {
         (&["tactile-fit", text(&map)], 0),
         // A run whose reader went away still drives the cell to its end
         // (seed 3 succeeds after one regrasp).
-        (&["run", "tasks/regrasp.toml", "--seed", "3", "--no-record"], 0),
+        (
+            &["run", "tasks/regrasp.toml", "--seed", "3", "--no-record"],
+            0,
+        ),
     ];
     for (args, status) in cases {
         let out = with_closed_stdout(args);
@@ -102,7 +105,14 @@ fn graphviz_draws_the_machine_as_svg() {
     assert!(svg.status.success());
     let svg = String::from_utf8_lossy(&svg.stdout);
     assert!(svg.contains("<svg"), "{svg}");
-    for state in ["prepare", "detect", "trial_grasp", "evaluate", "regrasp", "verify"] {
+    for state in [
+        "prepare",
+        "detect",
+        "trial_grasp",
+        "evaluate",
+        "regrasp",
+        "verify",
+    ] {
         assert!(svg.contains(&format!(">{state}</text>")), "{state}");
     }
 }

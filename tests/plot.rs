@@ -57,9 +57,14 @@ fn svg(path: &Path) -> String {
 /// Reads the PNG back: it decodes, has the figures' size and shows more
 /// than a blank page.
 fn check_png(path: &Path) {
-    let image = opencv::imgcodecs::imread(text(path), opencv::imgcodecs::IMREAD_COLOR)
-        .expect("imread");
-    assert_eq!((image.cols(), image.rows()), (1000, 620), "{}", path.display());
+    let image =
+        opencv::imgcodecs::imread(text(path), opencv::imgcodecs::IMREAD_COLOR).expect("imread");
+    assert_eq!(
+        (image.cols(), image.rows()),
+        (1000, 620),
+        "{}",
+        path.display()
+    );
     let mut drawn = 0;
     for row in 0..image.rows() {
         for col in 0..image.cols() {
@@ -75,7 +80,10 @@ fn check_png(path: &Path) {
 /// `<circle` elements filled with `colour`.
 fn filled_circles(svg: &str, colour: RGBColor) -> usize {
     let fill = format!("fill=\"{}\"", hex(colour));
-    svg.split("<circle").skip(1).filter(|c| c.contains(&fill)).count()
+    svg.split("<circle")
+        .skip(1)
+        .filter(|c| c.contains(&fill))
+        .count()
 }
 
 /// `<polyline` elements stroked with `colour` at `width`.
@@ -169,7 +177,10 @@ fn tiny_campaign(dir: &Path) -> std::path::PathBuf {
         .expect("the shipped campaign");
     let tasks = root().join("tasks");
     let file = shipped
-        .replace("\"regrasp.toml\"", &format!("{:?}", tasks.join("regrasp.toml")))
+        .replace(
+            "\"regrasp.toml\"",
+            &format!("{:?}", tasks.join("regrasp.toml")),
+        )
         .replace(
             "\"../config/cell.sim.toml\"",
             &format!("{:?}", root().join("config/cell.sim.toml")),
@@ -228,7 +239,10 @@ fn bad_input_is_refused_naming_the_file() {
     let cases: Vec<(Vec<&str>, &Path)> = vec![
         (vec!["tactile", text(&missing)], &missing),
         (vec!["regrasp", text(&missing)], &missing),
-        (vec!["tactile", text(&recording), "--grasp", "7"], &recording),
+        (
+            vec!["tactile", text(&recording), "--grasp", "7"],
+            &recording,
+        ),
         (vec!["tactile", text(&map)], &map),
         (vec!["tactile", text(&map), "--grasp", "1"], &map),
         (vec!["campaign", text(&not_a_campaign)], &not_a_campaign),

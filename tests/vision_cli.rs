@@ -181,7 +181,10 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
     let out = cablecell(&["detect", text(&empty), "--json"]);
     assert_eq!(out.status.code(), Some(0));
     let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(reports["images"][0]["cables"].as_array().map(Vec::len), Some(0));
+    assert_eq!(
+        reports["images"][0]["cables"].as_array().map(Vec::len),
+        Some(0)
+    );
 
     let bogus = dir.path().join("bogus.png");
     std::fs::write(&bogus, "not a picture").expect("write");

@@ -2,11 +2,11 @@
 
 use std::path::Path;
 
+use super::output::{out, outln};
+use super::{Status, progress};
 use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
 use cablecell::campaign::summary::{render_table, summarise};
 use cablecell::campaign::trial::TrialEntry;
-use super::output::{out, outln};
-use super::{Status, progress};
 
 pub fn campaign(
     path: &Path,

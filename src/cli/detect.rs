@@ -16,10 +16,10 @@ use opencv::core::Mat;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Status, output};
 use super::output::outln;
 use super::progress;
 use super::vision_io::{VisionArgs, create_dir, draw_overlay, write_png};
+use super::{Status, output};
 
 /// What `detect --json` prints.
 #[derive(Serialize, JsonSchema)]

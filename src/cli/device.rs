@@ -2,6 +2,7 @@
 //! arm --address HOST ...`: bring-up commands that talk to one device and
 //! print what it answered.
 
+use crate::cli::output::outln;
 use std::time::{Duration, Instant};
 
 use cablecell::hw::clock::MonotonicClock;
@@ -313,7 +314,8 @@ fn read(
     let mut estimator = BiasEstimator::new(bias_samples);
     let bias = frames.iter().find_map(|f| estimator.push(f));
     let last = frames[frames.len() - 1];
-    let raw_v = std::array::from_fn(|row| std::array::from_fn(|col| raw_to_volts(last[5 * row + col])));
+    let raw_v =
+        std::array::from_fn(|row| std::array::from_fn(|col| raw_to_volts(last[5 * row + col])));
     // `samples` ≥ 1 and the estimator wants at most that many frames.
     let dv_v = bias.map_or([[0.0; 5]; 5], |b| b.remove(&last).dv_v);
     Ok(TactileReading {
@@ -333,7 +335,13 @@ impl TactileReading {
                 .map(|row| {
                     let cells: Vec<String> = row
                         .iter()
-                        .map(|v| if sign { format!("{v:+6.3}") } else { format!("{v:6.3}") })
+                        .map(|v| {
+                            if sign {
+                                format!("{v:+6.3}")
+                            } else {
+                                format!("{v:6.3}")
+                            }
+                        })
                         .collect();
                     format!("  {}\n", cells.join(" "))
                 })
@@ -354,7 +362,7 @@ impl TactileReading {
 fn report(result: Result<String, cablecell::hw::DeviceError>) -> Status {
     match result {
         Ok(text) => {
-            println!("{text}");
+            outln!("{text}");
             Status::Success
         }
         Err(error) => {

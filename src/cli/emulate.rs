@@ -2,6 +2,7 @@
 //! pseudo-terminal, for trying the bring-up commands and the cell without
 //! hardware.
 
+use crate::cli::output::outln;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 
@@ -84,7 +85,7 @@ pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Statu
 }
 
 fn announce(path: &str, what: &str) {
-    println!("{path}");
+    outln!("{path}");
     let _ = std::io::stdout().flush();
     eprintln!("emulating {what} on {path}; Ctrl-C stops it");
 }

@@ -10,6 +10,7 @@ pub fn bar(len: usize, what: &str) -> ProgressBar {
     let template = format!(
         "{{bar:30}} {{pos}}/{{len}} {what}  {{per_sec}}, {{elapsed}} elapsed, about {{eta}} left  {{msg}}"
     );
-    let style = ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
+    let style =
+        ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
     ProgressBar::new(len as u64).with_style(style)
 }

@@ -2,6 +2,7 @@
 //! truth, in the layout of cables-dev, for training the segmentation
 //! network and for scoring the pipeline with `eval-vision`.
 
+use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 
 use cablecell::sim::render::{BackgroundChoice, SceneOptions, write_dataset};
@@ -91,7 +92,7 @@ pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
     bar.finish_and_clear();
     match written {
         Ok(()) => {
-            println!(
+            outln!(
                 "{}: {} images, seed {}",
                 args.out.display(),
                 args.count,

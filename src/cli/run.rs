@@ -91,12 +91,16 @@ pub fn run(
     } else {
         outln!(
             "task {} on {} (seed {seed})",
-            task.task.name, cell.cell.name
+            task.task.name,
+            cell.cell.name
         );
         let (target, tolerance) = (task.target, task.tolerance);
         outln!(
             "target n* = {:+.3} mm, α* = {:+.4} rad; tolerance ±{} mm, ±{} rad",
-            target.n_mm, target.alpha_rad, tolerance.n_mm, tolerance.alpha_rad
+            target.n_mm,
+            target.alpha_rad,
+            tolerance.n_mm,
+            tolerance.alpha_rad
         );
         let mut commentary = Commentary::default();
         loop {
@@ -205,7 +209,11 @@ fn print_grasp(name: &str, grasp: &GraspRecord) {
     if let Some(truth) = &grasp.truth {
         outln!(
             "{:>13}  true     n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
-            "", truth.line.n_mm, truth.line.alpha_rad, truth.error.n_mm, truth.error.alpha_rad
+            "",
+            truth.line.n_mm,
+            truth.line.alpha_rad,
+            truth.error.n_mm,
+            truth.error.alpha_rad
         );
     }
     if let Some(errors) = grasp.shapes.as_ref().and_then(|shapes| shapes.errors) {
@@ -240,13 +248,15 @@ pub(super) fn print_outcome(record: &RunRecord) {
     if let Some(touch_only) = &record.touch_only {
         outln!(
             "touch only ({}): {} search move(s)",
-            touch_only.why, touch_only.search_moves
+            touch_only.why,
+            touch_only.search_moves
         );
     }
     match &record.outcome {
         Some(RunOutcome::Success { regrasps }) => outln!(
             "success: within tolerance (|n| ≤ {} mm, |α| ≤ {} rad) after {regrasps} regrasp(s)",
-            tolerance.n_mm, tolerance.alpha_rad
+            tolerance.n_mm,
+            tolerance.alpha_rad
         ),
         Some(RunOutcome::Failed { reason }) => outln!("task failed: {reason}"),
         Some(RunOutcome::Fault {

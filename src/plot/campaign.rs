@@ -15,8 +15,7 @@ use plotters::style::{Color, RGBColor};
 
 use super::regrasp::grasp_name;
 use super::{
-    Axes, Chart, Figure, LegendEntry, PlotError, Sample, chart, colour, draw_legend,
-    drawing_error,
+    Axes, Chart, Figure, LegendEntry, PlotError, Sample, chart, colour, draw_legend, drawing_error,
 };
 
 /// The paper's mean errors (Section IV-A, 20 trials): |n| (mm) and |α|
@@ -192,9 +191,13 @@ fn draw_box<DB: DrawingBackend>(
     // The golden ratio's fractional parts spread the dots evenly.
     let jitter = |i: usize| ((i as f64 * 0.618_033_988_75).fract() * 2.0 - 1.0) * 0.8 * half_width;
     chart
-        .draw_series(spread.values.iter().enumerate().map(|(i, &v)| {
-            Circle::new((x + jitter(i), v), 3, box_colour.mix(0.75).filled())
-        }))
+        .draw_series(
+            spread
+                .values
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| Circle::new((x + jitter(i), v), 3, box_colour.mix(0.75).filled())),
+        )
         .map_err(drawing_error)?;
     Ok(())
 }
@@ -223,7 +226,13 @@ impl Figure for CampaignFigure {
         let (panels, legend_area) = below.split_vertically(height.saturating_sub(legend_px));
         let (width, _) = panels.dim_in_pixel();
         let (left, right) = panels.split_horizontally(width / 2);
-        self.panel(&left, "|n|, true against the target (mm)", |p| &p.n_mm, |m| m.0, 1)?;
+        self.panel(
+            &left,
+            "|n|, true against the target (mm)",
+            |p| &p.n_mm,
+            |m| m.0,
+            1,
+        )?;
         self.panel(
             &right,
             "|α|, true against the target (rad)",
@@ -240,9 +249,11 @@ impl Figure for CampaignFigure {
                     .success
                     .as_ref()
                     .map_or("no trials".to_owned(), success_text);
-                let regrasps = policy.regrasps_mean_max.map_or(String::new(), |(mean, max)| {
-                    format!("; regrasps per trial {mean:.2} (at most {max:.0})")
-                });
+                let regrasps = policy
+                    .regrasps_mean_max
+                    .map_or(String::new(), |(mean, max)| {
+                        format!("; regrasps per trial {mean:.2} (at most {max:.0})")
+                    });
                 LegendEntry::new(
                     Sample::Patch {
                         colour: colour::nth(&colour::POLICIES, p),

@@ -21,12 +21,12 @@ use std::sync::OnceLock;
 
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
-use plotters::prelude::{
-    BitMapBackend, Cartesian2d, ChartBuilder, ChartContext, Circle,
-    DrawingArea, DrawingAreaErrorKind, DrawingBackend, IntoDrawingArea, IntoFont, PathElement,
-    RGBColor, Rectangle, SVGBackend, Text,
-};
 use plotters::element::DashedPathElement;
+use plotters::prelude::{
+    BitMapBackend, Cartesian2d, ChartBuilder, ChartContext, Circle, DrawingArea,
+    DrawingAreaErrorKind, DrawingBackend, IntoDrawingArea, IntoFont, PathElement, RGBColor,
+    Rectangle, SVGBackend, Text,
+};
 use plotters::style::{Color, FontStyle, register_font};
 
 use crate::geometry::LineInSensor;
@@ -269,13 +269,25 @@ pub fn titled_square<DB: DrawingBackend>(
 /// How a legend entry's sample is drawn.
 #[derive(Debug, Clone, Copy)]
 pub enum Sample {
-    Line { colour: RGBColor, width: u32 },
-    Dashed { colour: RGBColor, width: u32 },
+    Line {
+        colour: RGBColor,
+        width: u32,
+    },
+    Dashed {
+        colour: RGBColor,
+        width: u32,
+    },
     /// An outline: filled circles of a colour are the data's alone.
-    Ring { colour: RGBColor },
+    Ring {
+        colour: RGBColor,
+    },
     /// A dot the data's size.
-    Dot { colour: RGBColor },
-    Patch { colour: RGBColor },
+    Dot {
+        colour: RGBColor,
+    },
+    Patch {
+        colour: RGBColor,
+    },
     /// Text only (a heading, a note).
     None,
 }
@@ -445,8 +457,8 @@ mod tests {
         assert!((up[0].0 + 1.0).abs() < 1e-9 && (up[1].0 + 1.0).abs() < 1e-9);
         assert!((up[0].1.abs() - 5.0).abs() < 1e-9);
         // The diagonal meets the corners.
-        let diagonal = line_in_square(&LineInSensor::new(std::f64::consts::FRAC_PI_4, 0.0), 5.0)
-            .unwrap();
+        let diagonal =
+            line_in_square(&LineInSensor::new(std::f64::consts::FRAC_PI_4, 0.0), 5.0).unwrap();
         assert!((diagonal[0].0 + 5.0).abs() < 1e-9 && (diagonal[1].1 - 5.0).abs() < 1e-9);
     }
 }

@@ -63,9 +63,8 @@ impl TactileFigure {
 
     /// The legend's rows, in drawing order.
     fn legend(&self) -> Vec<LegendEntry> {
-        let line_text = |line: &LineInSensor| {
-            format!("n {:+.2} mm, α {:+.3} rad", line.n_mm, line.alpha_rad)
-        };
+        let line_text =
+            |line: &LineInSensor| format!("n {:+.2} mm, α {:+.3} rad", line.n_mm, line.alpha_rad);
         let mut entries = vec![LegendEntry::new(
             Sample::Ring {
                 colour: colour::TAXEL,
@@ -192,14 +191,19 @@ impl Figure for TactileFigure {
                 ))
                 .map_err(drawing_error)?;
         }
-        let px_per_mm = f64::from(chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0);
+        let px_per_mm =
+            f64::from(chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0);
         let max_radius_px = MAX_RADIUS_PITCH * pitch * px_per_mm;
         let peak_v = self.map.peak_dv_v();
         let taxels = (0..TAXEL_ROWS).flat_map(|row| (0..TAXEL_COLS).map(move |col| (row, col)));
         chart
             .draw_series(taxels.map(|(row, col)| {
                 let share = self.map.dv_v[row][col] / peak_v;
-                let share = if share.is_finite() { share.clamp(0.0, 1.0) } else { 0.0 };
+                let share = if share.is_finite() {
+                    share.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 let radius_px = (share * max_radius_px).max(MIN_RADIUS_PX).round() as u32;
                 Circle::new(
                     (taxel_x_mm(col, pitch), taxel_y_mm(row, pitch)),
@@ -226,9 +230,11 @@ impl Figure for TactileFigure {
                     .map_err(drawing_error)?;
             }
             chart
-                .draw_series(fit.centroids.iter().map(|c| {
-                    Circle::new((c.x_mm, c.y_mm), 5, colour::CENTROID.filled())
-                }))
+                .draw_series(
+                    fit.centroids
+                        .iter()
+                        .map(|c| Circle::new((c.x_mm, c.y_mm), 5, colour::CENTROID.filled())),
+                )
                 .map_err(drawing_error)?;
         }
         draw_legend(&legend_area, &self.legend())

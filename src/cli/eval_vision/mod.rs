@@ -15,8 +15,8 @@ use opencv::core::Mat;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Status, progress};
 use super::vision_io::VisionArgs;
+use super::{Status, progress};
 use load::load_samples;
 use print::print_evaluation;
 use score::{evaluate, labels_own_dice};

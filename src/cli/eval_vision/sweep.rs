@@ -1,6 +1,7 @@
 //! The sweep: the main settings one after another, in rounds, as a table of
 //! run time against error.
 
+use crate::cli::output::outln;
 use std::path::PathBuf;
 
 use cablecell::campaign::stats::Summary;
@@ -157,21 +158,21 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     if args.json {
         return crate::cli::json::print(Sweep { rows });
     }
-    println!(
+    outln!(
         "{}: {} images, timed in {} round(s)",
         args.dir.display(),
         samples.len(),
         args.rounds
     );
-    println!(
+    outln!(
         "| setting | median ms | p95 ms | union DICE | count right | labels found | found labelled | length found | found length labelled | grasp px mean | grasp px median | centre line px |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    outln!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let cell =
         |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
     let percent = |v: Option<f64>| v.map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r));
     for row in &rows {
-        println!(
+        outln!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             row.setting,
             cell(row.total_ms_median, 1),

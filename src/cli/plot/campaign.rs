@@ -48,9 +48,10 @@ pub(super) fn campaign(folder: &Path, out: Option<&Path>) -> Result<PathBuf, Fai
         }
     }
     let trials = entries.iter().map(|e| e.trial + 1).max().unwrap_or(0);
-    let name = folder
-        .file_name()
-        .map_or_else(|| folder.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let name = folder.file_name().map_or_else(
+        || folder.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
     let summary = summarise(&name, first.campaign_seed, trials, &policies, &entries);
     let results = summary
         .policies

@@ -233,7 +233,12 @@ fn tactile(input: &Path, grasp: Option<u32>, out: Option<&Path>) -> Result<PathB
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         (
-            TactileFigure::new(map, &FitConfig::default(), None, format!("Tactile map {name}"))?,
+            TactileFigure::new(
+                map,
+                &FitConfig::default(),
+                None,
+                format!("Tactile map {name}"),
+            )?,
             beside(input, "tactile"),
         )
     };
@@ -259,7 +264,10 @@ fn regrasp(path: &Path, out: Option<&Path>) -> Result<PathBuf, Failure> {
     let title = format!("The cable on the pad, grasp by grasp{}", run_text(&run));
     let figure = RegraspFigure::new(grasps, run.target, run.tolerance, run.pitch_mm, title)
         .map_err(|e| Failure::BadInput(format!("{}: {e}", path.display())))?;
-    write(&figure, out.map_or_else(|| beside(path, "regrasp"), Path::to_owned))
+    write(
+        &figure,
+        out.map_or_else(|| beside(path, "regrasp"), Path::to_owned),
+    )
 }
 
 fn fusion(path: &Path, out: Option<&Path>, attempt: u32) -> Result<PathBuf, Failure> {
@@ -279,6 +287,9 @@ fn fusion(path: &Path, out: Option<&Path>, attempt: u32) -> Result<PathBuf, Fail
     let figure = FusionFigure::new(&message.shapes, title)?;
     write(
         &figure,
-        out.map_or_else(|| beside(path, &format!("fusion-{attempt}")), Path::to_owned),
+        out.map_or_else(
+            || beside(path, &format!("fusion-{attempt}")),
+            Path::to_owned,
+        ),
     )
 }

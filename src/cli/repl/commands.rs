@@ -1,6 +1,7 @@
 //! The REPL's commands: one table, from which the line is dispatched,
 //! `help` is printed and the arguments are completed.
 
+use crate::cli::output::outln;
 use std::path::Path;
 use std::sync::atomic::Ordering;
 
@@ -224,7 +225,7 @@ pub(super) const SHOW_TOPICS: [ShowTopic; 3] = [
         args: "",
         show: |loaded, _| {
             for (name, value) in loaded.params.list() {
-                println!("{name} = {value}");
+                outln!("{name} = {value}");
             }
             Ok(())
         },
@@ -288,7 +289,7 @@ fn advance(session: &mut Session, mode: Mode) -> Result<Flow, String> {
     let record = runner.record();
     match stop {
         Stop::Transition { to, .. } if !run_over(runner) => {
-            println!("in {to}{}", next_command(runner));
+            outln!("in {to}{}", next_command(runner));
         }
         Stop::Transition { .. } | Stop::Finished { .. } => {}
         Stop::Breakpoint { id, state } => {
@@ -297,15 +298,15 @@ fn advance(session: &mut Session, mode: Mode) -> Result<Flow, String> {
                 .and_then(|b| b.condition.as_ref())
                 .map(|c| format!(" (if {})", c.text()))
                 .unwrap_or_default();
-            println!(
+            outln!(
                 "breakpoint {id} hit on entering {state}{condition}{}",
                 next_command(runner)
             );
         }
-        Stop::Paused { state } => println!("paused in {state}{}", next_command(runner)),
+        Stop::Paused { state } => outln!("paused in {state}{}", next_command(runner)),
     }
     if run_over(runner) {
-        println!("run over in {}", runner.state().name());
+        outln!("run over in {}", runner.state().name());
         print_outcome(record);
     }
     Ok(Flow::Go)
@@ -325,7 +326,7 @@ fn reset(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
     };
     session.start(params, seed)?;
     let state = session.loaded()?.driver.runner().state().name();
-    println!("reset: {state} (seed {seed})");
+    outln!("reset: {state} (seed {seed})");
     Ok(Flow::Go)
 }
 
@@ -342,7 +343,7 @@ fn abort(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
         .abort(|runner| commentary.print_new(runner.record()))
         .map_err(|nothing| nothing.to_string())?;
     if let Some(error) = recording_error {
-        println!("warning: {error}; the run goes on unrecorded");
+        outln!("warning: {error}; the run goes on unrecorded");
     }
     print_outcome(loaded.driver.runner().record());
     Ok(Flow::Go)
@@ -363,8 +364,8 @@ fn add_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
         .add(state, condition.as_deref())
         .map_err(|e| e.to_string())?;
     match condition {
-        Some(condition) => println!("breakpoint {id}: {state} if {condition}"),
-        None => println!("breakpoint {id}: {state}"),
+        Some(condition) => outln!("breakpoint {id}: {state} if {condition}"),
+        None => outln!("breakpoint {id}: {state}"),
     }
     Ok(Flow::Go)
 }
@@ -372,10 +373,10 @@ fn add_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
 fn list_breaks(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
     let breakpoints = session.loaded()?.driver.breakpoints();
     if breakpoints.iter().next().is_none() {
-        println!("no breakpoints");
+        outln!("no breakpoints");
     }
     for breakpoint in breakpoints.iter() {
-        println!("{breakpoint}");
+        outln!("{breakpoint}");
     }
     Ok(Flow::Go)
 }
@@ -390,7 +391,7 @@ fn delete_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     if !session.loaded()?.driver.breakpoints_mut().delete(id) {
         return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
     }
-    println!("deleted breakpoint {id}");
+    outln!("deleted breakpoint {id}");
     Ok(Flow::Go)
 }
 
@@ -432,9 +433,9 @@ fn set(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     let recorded = loaded
         .driver
         .set_plan(Plan::new(loaded.params.task(), &cell));
-    println!("{param} = {value} (from the next command on)");
+    outln!("{param} = {value} (from the next command on)");
     if let Err(error) = recorded {
-        println!("warning: {error}; the run goes on unrecorded");
+        outln!("warning: {error}; the run goes on unrecorded");
     }
     Ok(Flow::Go)
 }
@@ -447,30 +448,30 @@ fn values(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
         let value = values
             .get(name)
             .map_or("(none yet)".to_owned(), |v| format!("{v:.4}"));
-        println!("{name:>22} = {value:<12} {}", RunValues::describe(name));
+        outln!("{name:>22} = {value:<12} {}", RunValues::describe(name));
     }
     Ok(Flow::Go)
 }
 
 fn print_help() {
-    println!("commands:");
+    outln!("commands:");
     for spec in &COMMANDS {
-        println!(
+        outln!(
             "  {:<28} {}",
             format!("{} {}", spec.name, spec.args),
             spec.help
         );
     }
     let short: Vec<_> = COMMANDS.iter().filter(|s| !s.aliases.is_empty()).collect();
-    println!(
+    outln!(
         "({} also as {})",
         and_list(short.iter().map(|spec| spec.name)),
         and_list(short.iter().flat_map(|spec| spec.aliases.iter().copied()))
     );
-    println!("states: {}", State::NAMES.join(", "));
-    println!("values for `break STATE if EXPR` (`values` shows them now):");
-    println!("  {}", RunValues::NAMES.join(", "));
-    println!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
+    outln!("states: {}", State::NAMES.join(", "));
+    outln!("values for `break STATE if EXPR` (`values` shows them now):");
+    outln!("  {}", RunValues::NAMES.join(", "));
+    outln!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
 }
 
 /// `a, b and c`.

@@ -1,6 +1,7 @@
 //! What the REPL shows of a run: its state and the next command, the arm's
 //! pose, the latest tactile map with its fit.
 
+use crate::cli::output::outln;
 use std::path::Path;
 
 use cablecell::orchestrator::{Command, Runner};
@@ -41,7 +42,7 @@ fn command_name(command: &Command) -> &'static str {
 pub(super) fn show_state(loaded: &Loaded) {
     let runner = loaded.driver.runner();
     let record = runner.record();
-    println!(
+    outln!(
         "state {} at {:.3} s{}",
         runner.state().name(),
         runner.now_s(),
@@ -49,13 +50,13 @@ pub(super) fn show_state(loaded: &Loaded) {
     );
     let first = record.transitions.len().saturating_sub(8);
     if first > 0 {
-        println!("  ({first} earlier transitions)");
+        outln!("  ({first} earlier transitions)");
     }
     for (i, t) in record.transitions.iter().enumerate().skip(first) {
         print_transition(record, i, t);
     }
     if let Some(entered) = record.transitions.last() {
-        println!(
+        outln!(
             "  in {} for {:.3} s",
             entered.to,
             runner.now_s() - entered.t_s
@@ -71,9 +72,9 @@ pub(super) fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
         .driver
         .base_from_tcp()
         .map_err(|e| format!("the arm did not answer: {e}"))?;
-    println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
+    outln!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
     if let Some((name, grasp)) = latest_grasp(loaded.driver.runner().record()) {
-        println!(
+        outln!(
             "at the latest grasp ({name}): {}",
             pose_text(&grasp.base_from_tcp)
         );
@@ -120,20 +121,20 @@ pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), S
         Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
         _ => Vec::new(),
     };
-    println!(
+    outln!(
         "{name} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
         grasp.t_s,
         grasp.map.peak_dv_v()
     );
     for row in draw_map(&grasp.map, pitch_mm, line, &centroids) {
-        println!("  |{row}|");
+        outln!("  |{row}|");
     }
-    println!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
+    outln!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
     for row in 0..TAXEL_ROWS {
         let values: Vec<String> = (0..TAXEL_COLS)
             .map(|col| format!("{:7.1}", grasp.map.dv_v[row][col] * 1000.0))
             .collect();
-        println!("  {}", values.join(""));
+        outln!("  {}", values.join(""));
     }
     match (&grasp.fit, line) {
         (Some(fit), Some(line)) => {
@@ -142,17 +143,19 @@ pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), S
                 Estimate::Ridge(_) => "ridge",
                 Estimate::Oracle { .. } => "oracle",
             };
-            println!(
+            outln!(
                 "fitted line ({name}): n {:+.3} mm, α {:+.4} rad",
-                line.n_mm, line.alpha_rad
+                line.n_mm,
+                line.alpha_rad
             );
         }
-        _ => println!("no fitted line: the fit failed"),
+        _ => outln!("no fitted line: the fit failed"),
     }
     if let Some(truth) = &grasp.truth {
-        println!(
+        outln!(
             "true line:            n {:+.3} mm, α {:+.4} rad",
-            truth.line.n_mm, truth.line.alpha_rad
+            truth.line.n_mm,
+            truth.line.alpha_rad
         );
     }
     if let Some(file) = file {
@@ -164,7 +167,7 @@ pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), S
         TactileFigure::new(grasp.map, &fit_config, truth, title)
             .and_then(|figure| save(&figure, file))
             .map_err(|e| e.to_string())?;
-        println!("drew the map in {}", file.display());
+        outln!("drew the map in {}", file.display());
     }
     Ok(())
 }

@@ -3,8 +3,8 @@
 //! other, whose middle (s = 0.5) is the grasp point and whose direction
 //! there comes from the points at s = 0.45 and s = 0.55.
 
-use schemars::JsonSchema;
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use schemars::JsonSchema;
 
 /// Length of cable, in pixels, per control point: fine enough to follow a
 /// bend of a few cable widths, coarse enough to smooth pixel staircases.

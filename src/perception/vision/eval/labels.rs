@@ -2,8 +2,8 @@
 //! labelled cable's mask was drawn along, and how well those curves,
 //! drawn at one width, explain the labelled masks.
 
-use schemars::JsonSchema;
 use opencv::prelude::*;
+use schemars::JsonSchema;
 
 use super::dataset::GroundTruth;
 use super::measure::{count, dice, distance_to_polylines, mean};

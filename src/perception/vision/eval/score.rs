@@ -2,10 +2,10 @@
 //! instance overlap, counts, which cables each side missed, centre-line
 //! and grasp-point distances, and their means over a data set.
 
-use schemars::JsonSchema;
 use opencv::core::{self, Mat};
 use opencv::imgproc;
 use opencv::prelude::*;
+use schemars::JsonSchema;
 
 use super::dataset::GroundTruth;
 use super::measure::{count, dice, distance_to_polylines, mean, overlap, size_of};

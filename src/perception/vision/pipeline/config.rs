@@ -1,8 +1,8 @@
 //! What the pipeline is asked to do: how the mask is made, how it is
 //! split into cables, and the sizes and lengths that judge what is found.
 
-use schemars::JsonSchema;
 use opencv::core::Rect;
+use schemars::JsonSchema;
 
 use crate::perception::vision::superpixels;
 #[cfg(doc)]

@@ -1,8 +1,8 @@
 //! What the pipeline finds: the cables, each in the image's pixels, and
 //! how it found them.
 
-use schemars::JsonSchema;
 use opencv::core::Mat;
+use schemars::JsonSchema;
 
 use super::config::MaskMethod;
 use crate::perception::vision::mask::BackgroundStats;
