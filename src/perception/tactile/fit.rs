@@ -27,7 +27,7 @@
 
 use std::fmt;
 
-use nalgebra::{SMatrix, SVector, Vector2};
+use nalgebra::Vector2;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -164,7 +164,7 @@ pub enum FitError {
 
 /// The clamped weights of a map, divided by their peak.
 struct Weights {
-    /// In [0, 1], the peak taxel at exactly 1.
+    /// In [0, 1] to a rounding, the peak taxel at 1.
     w: [[f64; TAXEL_COLS]; TAXEL_ROWS],
     peak_v: f64,
     negative: usize,
@@ -188,10 +188,12 @@ impl Weights {
             }
         }
         if peak_v > 0.0 {
-            // Dividing by the (finite, positive) peak never overflows, and
-            // keeps the sums below 5 whatever the voltages.
+            // Scaling by the (finite, positive) peak never overflows, and
+            // keeps the sums below 5 whatever the voltages. The reciprocal
+            // of a subnormal peak is infinite: then divide.
+            let per_v = peak_v.recip();
             for w in w.iter_mut().flatten() {
-                *w /= peak_v;
+                *w = if per_v.is_finite() { *w * per_v } else { *w / peak_v };
             }
         }
         let saturated = map.saturated.iter().flatten().filter(|&&s| s).count();
@@ -332,7 +334,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         });
     }
 
-    let line = fit_line(&samples, direction, pitch_mm);
+    let Fits { line, quadratic } = Fits::of(&samples, direction, pitch_mm);
     let (slope_m, intercept_n_mm) = line.slope_intercept().unzip();
     Ok(WireFit {
         direction,
@@ -342,7 +344,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         line,
         slope_m,
         intercept_n_mm,
-        quadratic: fit_quadratic(&samples, pitch_mm),
+        quadratic,
         peak_dv_v: peak_v,
         negative_taxels: weights.negative,
         saturated_taxels: weights.saturated,
@@ -356,55 +358,68 @@ fn carries_contact(sum: f64, threshold: f64) -> bool {
     sum >= threshold && sum > 0.0
 }
 
-/// Least squares of t on u (at least 2 distinct u), as a line in mm.
-fn fit_line(samples: &Samples, direction: Direction, pitch_mm: f64) -> LineInSensor {
-    let (u, t) = (&samples.u[..samples.len], &samples.t[..samples.len]);
-    let n = samples.len as f64;
-    let u_mean = u.iter().sum::<f64>() / n;
-    let t_mean = t.iter().sum::<f64>() / n;
-    let (mut s_uu, mut s_ut) = (0.0, 0.0);
-    for (&u, &t) in u.iter().zip(t) {
-        s_uu += (u - u_mean) * (u - u_mean);
-        s_ut += (u - u_mean) * (t - t_mean);
-    }
-    // u are distinct whole pitches, so s_uu >= 1/2.
-    let slope = s_ut / s_uu;
-    let (point, dir) = match direction {
-        Direction::Horizontal => (Vector2::new(u_mean, t_mean), Vector2::new(1.0, slope)),
-        Direction::Vertical => (Vector2::new(t_mean, u_mean), Vector2::new(slope, 1.0)),
-    };
-    LineInSensor::through(point * pitch_mm, dir)
+/// The least-squares line and parabola of t on u, both from one set of
+/// polynomials orthogonal over the samples' u (Forsythe's three-term
+/// recurrence): each coefficient is one projection, so the fits cost a few
+/// sums (no QR, no normal equations) and stay as well conditioned as the
+/// data, whatever the pitch. The line needs 2 distinct u, the parabola 3.
+struct Fits {
+    line: LineInSensor,
+    /// `None` with fewer than 3 samples.
+    quadratic: Option<Quadratic>,
 }
 
-/// Least squares of t = a u² + b u + c (at least 3 distinct u), by QR on
-/// centred coordinates in pitches, converted to mm.
-fn fit_quadratic(samples: &Samples, pitch_mm: f64) -> Option<Quadratic> {
-    if samples.len < 3 {
-        return None;
+impl Fits {
+    fn of(samples: &Samples, direction: Direction, pitch_mm: f64) -> Self {
+        let (u, t) = (&samples.u[..samples.len], &samples.t[..samples.len]);
+        let n = samples.len as f64;
+        let u_mean = u.iter().sum::<f64>() / n;
+        let t_mean = t.iter().sum::<f64>() / n;
+        // p0 = 1, p1 = s, p2 = s (s - α2) - β1, with s = u - ū.
+        let (mut s_ss, mut s_st, mut s_sss) = (0.0, 0.0, 0.0);
+        for (&u, &t) in u.iter().zip(t) {
+            let s = u - u_mean;
+            s_ss += s * s;
+            s_st += s * (t - t_mean);
+            s_sss += s * s * s;
+        }
+        // u are distinct whole pitches, so Σs² ≥ 1/2.
+        let slope = s_st / s_ss;
+        let (point, dir) = match direction {
+            Direction::Horizontal => (Vector2::new(u_mean, t_mean), Vector2::new(1.0, slope)),
+            Direction::Vertical => (Vector2::new(t_mean, u_mean), Vector2::new(slope, 1.0)),
+        };
+        let line = LineInSensor::through(point * pitch_mm, dir);
+        if samples.len < 3 {
+            return Self {
+                line,
+                quadratic: None,
+            };
+        }
+        let alpha2 = s_sss / s_ss;
+        let beta1 = s_ss / n;
+        let (mut p2_p2, mut p2_t) = (0.0, 0.0);
+        for (&u, &t) in u.iter().zip(t) {
+            let s = u - u_mean;
+            let p2 = s * (s - alpha2) - beta1;
+            p2_p2 += p2 * p2;
+            p2_t += p2 * t;
+        }
+        // 3 distinct whole pitches keep p2 away from 0 at one of them.
+        let a = p2_t / p2_p2;
+        // t = a s² + b s + c in pitches, expanding p2.
+        let (b, c) = (slope - a * alpha2, t_mean - a * beta1);
+        // Back in mm, with s = u - ū, u = U/p and t = T/p:
+        // T = (a/p) U² + (b - 2aū) U + p (aū² - bū + c).
+        Self {
+            line,
+            quadratic: Some(Quadratic {
+                a: a / pitch_mm,
+                b: b - 2.0 * a * u_mean,
+                c: pitch_mm * (a * u_mean * u_mean - b * u_mean + c),
+            }),
+        }
     }
-    let n = samples.len as f64;
-    let u_mean = samples.u[..samples.len].iter().sum::<f64>() / n;
-    // Unused rows stay zero: they add nothing to the residual.
-    let mut design = SMatrix::<f64, LINES, 3>::zeros();
-    let mut rhs = SVector::<f64, LINES>::zeros();
-    for k in 0..samples.len {
-        let s = samples.u[k] - u_mean;
-        design[(k, 0)] = s * s;
-        design[(k, 1)] = s;
-        design[(k, 2)] = 1.0;
-        rhs[k] = samples.t[k];
-    }
-    let qr = design.qr();
-    qr.q_tr_mul(&mut rhs);
-    let coeffs = qr.r().solve_upper_triangular(&rhs.fixed_rows::<3>(0))?;
-    let (a, b, c) = (coeffs[0], coeffs[1], coeffs[2]);
-    // t = a (u - ū)² + b (u - ū) + c in pitches; back in mm, with
-    // u = U/p and t = T/p: T = (a/p) U² + (b - 2aū) U + p (aū² - bū + c).
-    Some(Quadratic {
-        a: a / pitch_mm,
-        b: b - 2.0 * a * u_mean,
-        c: pitch_mm * (a * u_mean * u_mean - b * u_mean + c),
-    })
 }
 
 #[cfg(test)]
