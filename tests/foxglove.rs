@@ -379,3 +379,39 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
     assert!(received["/state"]["to"].is_string());
     assert!(advertised.contains(&"/tf".to_owned()), "{advertised:?}");
 }
+
+#[test]
+fn the_layout_shows_only_channels_recordings_have() {
+    let layout: Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("docs/foxglove-layout.json")).unwrap(),
+    )
+    .unwrap();
+    let names: Vec<&str> = cablecell::recording::Topic::ALL
+        .iter()
+        .map(|t| t.name())
+        .collect();
+    let mut seen = Vec::new();
+    fn topics(value: &Value, seen: &mut Vec<String>) {
+        match value {
+            Value::String(s) if s.starts_with('/') => {
+                // A message path: the topic, then `.field`.
+                seen.push(s.split('.').next().unwrap_or(s).to_owned());
+            }
+            Value::Object(fields) => {
+                for (key, value) in fields {
+                    if key.starts_with('/') {
+                        seen.push(key.clone());
+                    }
+                    topics(value, seen);
+                }
+            }
+            Value::Array(items) => items.iter().for_each(|v| topics(v, seen)),
+            _ => {}
+        }
+    }
+    topics(&layout["configById"], &mut seen);
+    assert!(seen.len() >= 8, "{seen:?}");
+    for topic in &seen {
+        assert!(names.contains(&topic.as_str()), "{topic} is no channel");
+    }
+}

@@ -267,6 +267,29 @@ fn every_campaign_trial_is_recorded() {
         let replay = Replay::of(&recording).unwrap();
         assert_eq!(replay.run.seed, entry.seed);
         assert_eq!(replay.fits.len(), entry.grasps.len());
+        // The metadata record says which trial it is.
+        let bytes = std::fs::read(campaign.recordings_folder().join(name)).unwrap();
+        let metadata = mcap::read::LinearReader::new(&bytes)
+            .unwrap()
+            .map(Result::unwrap)
+            .find_map(|record| match record {
+                mcap::records::Record::Metadata(m) => Some(m.metadata),
+                _ => None,
+            })
+            .expect("a metadata record");
+        assert_eq!(metadata["policy"], entry.policy);
+        assert_eq!(metadata["trial"], entry.trial.to_string());
+        assert_eq!(metadata["seed"], entry.seed.to_string());
+        let offset: f64 = metadata["perturbation.start_offset_mm"].parse().unwrap();
+        assert_eq!(offset, entry.perturbation.start_offset_mm);
+        // The oracle detector takes no image: no empty camera channel.
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        assert!(
+            summary
+                .channels
+                .values()
+                .all(|c| !c.topic.starts_with("/camera"))
+        );
     }
 }
 
