@@ -29,8 +29,8 @@ pub struct RecordArgs {
     #[arg(long, conflicts_with = "record")]
     pub no_record: bool,
     /// Serve the run live to Foxglove (its WebSocket protocol) on ADDR
-    /// (default 127.0.0.1:8765); a simulated cell runs at the wall clock's
-    /// pace.
+    /// (default 127.0.0.1:8765); `run` paces a simulated cell to the wall
+    /// clock, the REPL by `--pace`.
     #[arg(
         long,
         value_name = "ADDR",
