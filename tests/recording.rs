@@ -144,6 +144,25 @@ fn a_recording_holds_every_channel_with_foxglove_schemas_and_the_right_counts() 
     let recorded: Vec<&str> = states.iter().map(|s| s["to"].as_str().unwrap()).collect();
     let expected: Vec<&str> = record.transitions.iter().map(|t| t.to).collect();
     assert_eq!(recorded, expected);
+
+    // The paper's wire parameters are the centroid fit's.
+    let wire: Vec<cablecell::recording::schema::WireParamsMessage> = Recording::read(&path)
+        .unwrap()
+        .decode(Topic::WireParams)
+        .unwrap();
+    assert_eq!(wire.len(), record.grasps.len());
+    for (params, grasp) in wire.iter().zip(&record.grasps) {
+        let Some(cablecell::perception::tactile::Estimate::Centroids(fit)) = &grasp.fit else {
+            panic!("the regrasp task's estimator is the centroids'");
+        };
+        assert_eq!(
+            params.direction.as_deref(),
+            Some(fit.direction.to_string().as_str())
+        );
+        assert_eq!((params.m, params.n_mm), (fit.slope_m, fit.intercept_n_mm));
+        assert_eq!(params.a_per_mm, fit.quadratic.map(|q| q.a));
+        assert_eq!((params.h_v, params.v_v), (Some(fit.h_v), Some(fit.v_v)));
+    }
 }
 
 #[test]

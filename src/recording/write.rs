@@ -513,36 +513,23 @@ impl LiveSink {
 /// own fit, or the same fit made now for a grasp another estimator judged.
 fn wire_params(timestamp: Timestamp, grasp: &GraspRecord, config: &FitConfig) -> WireParamsMessage {
     let fitted = match &grasp.fit {
-        Some(Estimate::Centroids(fit)) => Ok(fit.clone()),
-        _ => fit_wire(&grasp.map, config),
+        Some(Estimate::Centroids(fit)) => Ok(std::borrow::Cow::Borrowed(fit)),
+        _ => fit_wire(&grasp.map, config).map(std::borrow::Cow::Owned),
     };
-    match fitted {
-        Ok(fit) => WireParamsMessage {
-            timestamp,
-            attempt: grasp.attempt,
-            direction: Some(fit.direction.to_string()),
-            m: fit.slope_m,
-            n_mm: fit.intercept_n_mm,
-            a_per_mm: fit.quadratic.map(|q| q.a),
-            b: fit.quadratic.map(|q| q.b),
-            c_mm: fit.quadratic.map(|q| q.c),
-            h_v: Some(fit.h_v),
-            v_v: Some(fit.v_v),
-            error: None,
-        },
-        Err(error) => WireParamsMessage {
-            timestamp,
-            attempt: grasp.attempt,
-            direction: None,
-            m: None,
-            n_mm: None,
-            a_per_mm: None,
-            b: None,
-            c_mm: None,
-            h_v: None,
-            v_v: None,
-            error: Some(error.to_string()),
-        },
+    let fit = fitted.as_ref().ok();
+    let quadratic = fit.and_then(|f| f.quadratic);
+    WireParamsMessage {
+        timestamp,
+        attempt: grasp.attempt,
+        direction: fit.map(|f| f.direction.to_string()),
+        m: fit.and_then(|f| f.slope_m),
+        n_mm: fit.and_then(|f| f.intercept_n_mm),
+        a_per_mm: quadratic.map(|q| q.a),
+        b: quadratic.map(|q| q.b),
+        c_mm: quadratic.map(|q| q.c),
+        h_v: fit.map(|f| f.h_v),
+        v_v: fit.map(|f| f.v_v),
+        error: fitted.as_ref().err().map(ToString::to_string),
     }
 }
 
