@@ -27,10 +27,12 @@ fn recorded_run(path: &Path, seed: u64) -> RunRecord {
     runner.into_record()
 }
 
-/// What the run record says each channel must hold.
+/// What the run record says each channel must hold; `/tf` (a message a
+/// step) is checked apart. Channels with no message are not in the file.
 fn expected_counts(record: &RunRecord) -> BTreeMap<&'static str, u64> {
     let (bias_frames, average_frames) = (50, 10); // tasks/regrasp.toml
     let frames = (bias_frames + average_frames * record.grasps.len()) as u64;
+    let dv_frames = frames - bias_frames as u64;
     let transitions = record.transitions.len() as u64;
     let grasps = record.grasps.len() as u64;
     // One target per approach, trial grasp and regrasp.
@@ -40,13 +42,17 @@ fn expected_counts(record: &RunRecord) -> BTreeMap<&'static str, u64> {
         ("/state", transitions),
         ("/log", transitions + 1),
         ("/tactile/raw", frames),
-        ("/tactile/dv", frames - bias_frames as u64),
+        ("/tactile/dv", dv_frames),
         ("/tactile/fit", grasps),
+        ("/tactile/wire_params", grasps),
+        ("/tactile/image", dv_frames),
         ("/arm/grasp_pose", grasps),
         ("/arm/target", targets),
-        // The oracle detector looks at no image.
-        ("/camera/image", 0),
         ("/cable/shapes", grasps),
+        // The pad at each Δv frame, the shapes at each grasp, the
+        // detected cable once. The oracle detector looks at no image: no
+        // camera channel.
+        ("/scene", dv_frames + grasps + 1),
     ])
 }
 
@@ -63,31 +69,71 @@ fn a_recording_holds_every_channel_with_foxglove_schemas_and_the_right_counts() 
     let stats = summary.stats.expect("statistics");
     let mut counts = BTreeMap::new();
     for (id, channel) in &summary.channels {
-        assert_eq!(channel.message_encoding, "json");
         let schema = channel.schema.as_ref().expect("a schema");
-        assert_eq!(schema.encoding, "jsonschema");
-        let expected_schema = match channel.topic.as_str() {
-            "/log" => "foxglove.Log",
-            "/arm/grasp_pose" | "/arm/target" => "foxglove.PoseInFrame",
-            "/camera/image" => "foxglove.CompressedImage",
-            _ => "cablecell.",
+        let (expected_schema, encoding) = match channel.topic.as_str() {
+            "/log" => ("foxglove.Log", "json"),
+            "/arm/grasp_pose" | "/arm/target" => ("foxglove.PoseInFrame", "json"),
+            "/tf" => ("foxglove.FrameTransforms", "protobuf"),
+            "/scene" => ("foxglove.SceneUpdate", "protobuf"),
+            "/tactile/image" => ("foxglove.RawImage", "protobuf"),
+            _ => ("cablecell.", "json"),
         };
         assert!(schema.name.starts_with(expected_schema), "{}", schema.name);
+        assert_eq!(channel.message_encoding, encoding, "{}", channel.topic);
+        let schema_encoding = if encoding == "json" {
+            "jsonschema"
+        } else {
+            "protobuf"
+        };
+        assert_eq!(schema.encoding, schema_encoding, "{}", channel.topic);
         counts.insert(
             channel.topic.as_str(),
             stats.channel_message_counts.get(id).copied().unwrap_or(0),
         );
     }
+    let tf = counts.remove("/tf").expect("a /tf channel");
+    assert!(tf > record.transitions.len() as u64 / 2, "{tf}");
     assert_eq!(counts, expected_counts(&record));
 
-    // Every message is JSON, in time order, with a Foxglove timestamp.
+    // Chunked, compressed and indexed, for Foxglove to seek in.
+    assert!(!summary.chunk_indexes.is_empty());
+    assert!(
+        summary
+            .chunk_indexes
+            .iter()
+            .all(|c| c.compression == "zstd" && !c.message_index_offsets.is_empty())
+    );
+    // The metadata record names the program and the run.
+    let metadata = mcap::read::LinearReader::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .find_map(|record| match record {
+            mcap::records::Record::Metadata(m) => Some(m),
+            _ => None,
+        })
+        .expect("a metadata record");
+    assert_eq!(metadata.name, "cablecell");
+    assert_eq!(metadata.metadata["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(metadata.metadata["task"], record.task);
+    assert_eq!(metadata.metadata["seed"], "3");
+
+    // Every JSON message has a Foxglove timestamp on the wall clock (the
+    // run is today, not 1970), equal to its log time; log times are in
+    // order.
     let mut last_ns = 0;
+    let this_year_ns = 1_700_000_000 * 1_000_000_000;
     for message in mcap::MessageStream::new(&bytes).unwrap() {
         let message = message.unwrap();
-        let value: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
-        assert!(value["timestamp"]["sec"].is_u64(), "{value}");
         assert!(message.log_time >= last_ns, "{}", message.channel.topic);
+        assert!(message.log_time > this_year_ns, "{}", message.log_time);
         last_ns = message.log_time;
+        if message.channel.message_encoding == "json" {
+            let value: serde_json::Value = serde_json::from_slice(&message.data).unwrap();
+            let stamp = &value["timestamp"];
+            let ns =
+                stamp["sec"].as_u64().unwrap() * 1_000_000_000 + stamp["nsec"].as_u64().unwrap();
+            assert_eq!(ns, message.log_time, "{}", message.channel.topic);
+        }
     }
     let states: Vec<serde_json::Value> = mcap::MessageStream::new(&bytes)
         .unwrap()
@@ -98,6 +144,25 @@ fn a_recording_holds_every_channel_with_foxglove_schemas_and_the_right_counts() 
     let recorded: Vec<&str> = states.iter().map(|s| s["to"].as_str().unwrap()).collect();
     let expected: Vec<&str> = record.transitions.iter().map(|t| t.to).collect();
     assert_eq!(recorded, expected);
+
+    // The paper's wire parameters are the centroid fit's.
+    let wire: Vec<cablecell::recording::schema::WireParamsMessage> = Recording::read(&path)
+        .unwrap()
+        .decode(Topic::WireParams)
+        .unwrap();
+    assert_eq!(wire.len(), record.grasps.len());
+    for (params, grasp) in wire.iter().zip(&record.grasps) {
+        let Some(cablecell::perception::tactile::Estimate::Centroids(fit)) = &grasp.fit else {
+            panic!("the regrasp task's estimator is the centroids'");
+        };
+        assert_eq!(
+            params.direction.as_deref(),
+            Some(fit.direction.to_string().as_str())
+        );
+        assert_eq!((params.m, params.n_mm), (fit.slope_m, fit.intercept_n_mm));
+        assert_eq!(params.a_per_mm, fit.quadratic.map(|q| q.a));
+        assert_eq!((params.h_v, params.v_v), (Some(fit.h_v), Some(fit.v_v)));
+    }
 }
 
 #[test]
@@ -221,6 +286,29 @@ fn every_campaign_trial_is_recorded() {
         let replay = Replay::of(&recording).unwrap();
         assert_eq!(replay.run.seed, entry.seed);
         assert_eq!(replay.fits.len(), entry.grasps.len());
+        // The metadata record says which trial it is.
+        let bytes = std::fs::read(campaign.recordings_folder().join(name)).unwrap();
+        let metadata = mcap::read::LinearReader::new(&bytes)
+            .unwrap()
+            .map(Result::unwrap)
+            .find_map(|record| match record {
+                mcap::records::Record::Metadata(m) => Some(m.metadata),
+                _ => None,
+            })
+            .expect("a metadata record");
+        assert_eq!(metadata["policy"], entry.policy);
+        assert_eq!(metadata["trial"], entry.trial.to_string());
+        assert_eq!(metadata["seed"], entry.seed.to_string());
+        let offset: f64 = metadata["perturbation.start_offset_mm"].parse().unwrap();
+        assert_eq!(offset, entry.perturbation.start_offset_mm);
+        // The oracle detector takes no image: no empty camera channel.
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        assert!(
+            summary
+                .channels
+                .values()
+                .all(|c| !c.topic.starts_with("/camera"))
+        );
     }
 }
 

@@ -17,6 +17,7 @@ use crate::hw::camera::config::{CameraBackend, OcclusionConfig};
 use crate::orchestrator::Runner;
 use crate::perception::tactile::Estimator;
 use crate::record::{RunOutcome, ShapeErrors};
+use crate::recording::RecordingTarget;
 use crate::schema::FrameConfig;
 use crate::sim::{Stream, rng};
 use crate::task::TaskFile;
@@ -203,6 +204,28 @@ fn apply_policy(
     (task, cell)
 }
 
+/// What a trial's recording says of it in its metadata record, beside the
+/// task, cell and seed: its policy, index and perturbation (each value as
+/// the journal writes it).
+fn trial_metadata(
+    policy: &str,
+    index: usize,
+    perturbation: &Perturbation,
+) -> std::collections::BTreeMap<String, String> {
+    let mut metadata = std::collections::BTreeMap::from([
+        ("policy".to_owned(), policy.to_owned()),
+        ("trial".to_owned(), index.to_string()),
+    ]);
+    if let Ok(serde_json::Value::Object(fields)) = serde_json::to_value(perturbation) {
+        metadata.extend(
+            fields
+                .into_iter()
+                .map(|(key, value)| (format!("perturbation.{key}"), value.to_string())),
+        );
+    }
+    metadata
+}
+
 /// Where trial `index` of `policy` is recorded in `folder`.
 pub fn recording_path(folder: &Path, policy: &str, index: usize) -> PathBuf {
     folder.join(format!("trial-{index:06}-{policy}.mcap"))
@@ -248,7 +271,14 @@ pub fn run_trial(
     let path = recordings.map(|folder| recording_path(folder, &policy.name, index));
     let recorded = path
         .as_deref()
-        .map(|path| runner.record_to(path, false))
+        .map(|path| {
+            let target = RecordingTarget {
+                file: Some(path),
+                live: None,
+                metadata: trial_metadata(&policy.name, index, &perturbation),
+            };
+            runner.start_recording(target, false)
+        })
         .transpose()
         .and_then(|_| runner.run_to_end())
         .and_then(|()| runner.finish_recording());

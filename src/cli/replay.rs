@@ -84,8 +84,10 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
     let mut pipeline = args.pipeline(false);
     let mut network = args.network();
     let mut status = Status::Success;
+    // Times from the recording's start (its times are dates).
+    let start_ns = recording.messages.first().map_or(0, |m| m.log_time_ns);
     for message in &images {
-        let t_s = f64::from(message.timestamp.sec) + f64::from(message.timestamp.nsec) * 1e-9;
+        let t_s = message.timestamp.ns().saturating_sub(start_ns) as f64 * 1e-9;
         let bytes = opencv::core::Vector::<u8>::from_slice(&message.data);
         let image = match imgcodecs::imdecode(&bytes, imgcodecs::IMREAD_COLOR) {
             Ok(image) if !image.empty() => image,

@@ -1,13 +1,19 @@
 //! `cablecell run TASK`
 
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use cablecell::cell::load_cell;
 use cablecell::orchestrator::Runner;
+use cablecell::orchestrator::breakpoint::Breakpoints;
+use cablecell::orchestrator::driver::{Driver, Mode, Stop};
 use cablecell::perception::shape::Distances;
 use cablecell::record::{GraspRecord, RunReport, ShapeErrors, TransitionRecord};
 use cablecell::record::{RunOutcome, RunRecord};
+use cablecell::recording::{LiveServer, RecordingTarget};
 use cablecell::task::load_task;
 
 use super::Status;
@@ -23,6 +29,16 @@ pub struct RecordArgs {
     /// Write no recording.
     #[arg(long, conflicts_with = "record")]
     pub no_record: bool,
+    /// Serve the run live to Foxglove (its WebSocket protocol) on ADDR
+    /// (default 127.0.0.1:8765); `run` paces a simulated cell to the wall
+    /// clock, the REPL by `--pace`.
+    #[arg(
+        long,
+        value_name = "ADDR",
+        num_args = 0..=1,
+        default_missing_value = cablecell::recording::live::DEFAULT_ADDR
+    )]
+    pub live: Option<SocketAddr>,
 }
 
 impl RecordArgs {
@@ -38,14 +54,38 @@ impl RecordArgs {
             PathBuf::from("runs").join(format!("{task}-seed{seed}-{ms}.mcap"))
         }))
     }
+
+    /// Starts the live view's server if `--live` asks for one, and says
+    /// where a viewer connects.
+    pub fn live_server(&self) -> Result<Option<Arc<LiveServer>>, String> {
+        let Some(addr) = self.live else {
+            return Ok(None);
+        };
+        let server = LiveServer::start(addr).map_err(|error| error.to_string())?;
+        eprintln!(
+            "live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)",
+            server.addr()
+        );
+        Ok(Some(Arc::new(server)))
+    }
 }
 
-/// Starts recording `runner` to `path`; a failure is reported and the run
-/// goes on unrecorded.
-pub(super) fn start_recording(runner: &mut Runner, path: Option<&Path>) {
-    if let Some(path) = path
-        && let Err(error) = runner.record_to(path, true)
-    {
+/// Starts recording `runner` to `path` and `live`; a failure is reported
+/// and the run goes on unrecorded.
+pub(super) fn start_recording(
+    runner: &mut Runner,
+    path: Option<&Path>,
+    live: Option<&Arc<LiveServer>>,
+) {
+    if path.is_none() && live.is_none() {
+        return;
+    }
+    let target = RecordingTarget {
+        file: path,
+        live: live.cloned(),
+        metadata: Default::default(),
+    };
+    if let Err(error) = runner.start_recording(target, true) {
         eprintln!("warning: {error}; the run goes on unrecorded");
     }
 }
@@ -83,8 +123,18 @@ pub fn run(
             return Status::DeviceFault;
         }
     };
-    start_recording(&mut runner, record.path(&task.task.name, seed).as_deref());
-    if json {
+    let live = match record.live_server() {
+        Ok(live) => live,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    let path = record.path(&task.task.name, seed);
+    start_recording(&mut runner, path.as_deref(), live.as_ref());
+    if live.is_some() {
+        runner = run_paced(runner, json);
+    } else if json {
         if let Err(error) = runner.run_to_end() {
             eprintln!("warning: {error}; the run went on unrecorded");
         }
@@ -122,6 +172,28 @@ pub fn run(
         print_outcome(&record);
     }
     outcome_status(&record)
+}
+
+/// Runs to the end at the wall clock's pace (a simulated cell is as fast
+/// as the computer otherwise: too fast to watch), printing the commentary
+/// unless the report is JSON.
+fn run_paced(runner: Runner, json: bool) -> Runner {
+    let mut driver = Driver::new(runner, Breakpoints::default(), Some(1.0));
+    let mut commentary = Commentary::default();
+    let no_pause = AtomicBool::new(false);
+    loop {
+        let stop = driver.advance(Mode::Continue, &no_pause, |runner| {
+            if !json {
+                commentary.print_new(runner.record());
+            }
+        });
+        match stop {
+            Ok(Stop::Finished { .. }) => break,
+            Ok(_) => {}
+            Err(error) => eprintln!("warning: {error}; the run goes on unrecorded"),
+        }
+    }
+    driver.into_parts().0
 }
 
 /// The exit status of a run's outcome.

@@ -639,6 +639,10 @@ mod tests {
     use crate::sim::{Stream, rng};
 
     fn plan(max_regrasps: u32, estimator: Estimator) -> Plan {
+        let tcp_from_sensor = Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, -10.0),
+            UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
+        );
         Plan {
             target: LineInSensor::new(0.0, 0.0),
             tolerance: PoseError {
@@ -659,12 +663,15 @@ mod tests {
                 contact_threshold_v: 0.05,
             },
             estimator,
-            tcp_from_sensor: Isometry3::from_parts(
-                Translation3::new(0.0, 0.0, -10.0),
-                UnitQuaternion::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0),
-            ),
+            tcp_from_sensor,
             prior: None,
             touch_only: false,
+            view: crate::recording::CellView {
+                tcp_from_sensor,
+                tcp_from_marker: Isometry3::identity(),
+                camera: None,
+                pitch_mm: 3.55,
+            },
         }
     }
 

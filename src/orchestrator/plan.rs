@@ -6,6 +6,7 @@ use crate::cell::CellFile;
 use crate::geometry::{CorrectionGain, LineInSensor, PoseError};
 use crate::perception::tactile::search::Prior;
 use crate::perception::tactile::{Estimator, FitConfig};
+use crate::recording::CellView;
 use crate::task::TaskFile;
 
 #[derive(Debug, Clone)]
@@ -30,6 +31,8 @@ pub struct Plan {
     pub prior: Option<Prior>,
     /// Search from the prior without looking; only with a prior.
     pub touch_only: bool,
+    /// The cell's frames and camera, as recordings draw them.
+    pub view: CellView,
 }
 
 impl Plan {
@@ -54,6 +57,7 @@ impl Plan {
             tcp_from_sensor: cell.tactile.tcp_from_sensor.isometry(),
             prior: task.prior.as_ref().map(|prior| prior.prior()),
             touch_only: task.task.touch_only && task.prior.is_some(),
+            view: CellView::of(cell),
         }
     }
 }

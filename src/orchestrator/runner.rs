@@ -16,12 +16,11 @@ use super::plan::Plan;
 use super::shapes::{grasp_shapes, pad_half_side_mm};
 use crate::cell::CellDevices;
 use crate::cell::CellFile;
-use crate::detector::Detections;
 use crate::hw::DeviceError;
 use crate::perception::shape::ShapePoint;
 use crate::record::RunRecord;
 use crate::recording::schema::{RunMessage, Timestamp};
-use crate::recording::{Recorder, RecordingError, Topic};
+use crate::recording::{Recorder, RecordingError, RecordingTarget, Topic};
 use crate::task::TaskFile;
 
 pub struct Runner {
@@ -77,8 +76,32 @@ impl Runner {
     /// `flush_each_step` makes every step durable as it ends (for runs a
     /// person watches); a campaign's trials flush only when they finish.
     pub fn record_to(&mut self, path: &Path, flush_each_step: bool) -> Result<(), RecordingError> {
+        let target = RecordingTarget {
+            file: Some(path),
+            live: None,
+            metadata: Default::default(),
+        };
+        self.start_recording(target, flush_each_step)
+    }
+
+    /// Records the run from now on to `target`'s file and live view; the
+    /// file's metadata gets the task, cell and seed beside `target`'s.
+    pub fn start_recording(
+        &mut self,
+        mut target: RecordingTarget<'_>,
+        flush_each_step: bool,
+    ) -> Result<(), RecordingError> {
+        let record = &self.context.record;
+        target.metadata.extend([
+            ("task".to_owned(), record.task.clone()),
+            ("cell".to_owned(), record.cell.clone()),
+            ("seed".to_owned(), record.seed.to_string()),
+        ]);
+        let now_s = self.cell.clock.now_s();
+        let mut recorder = Recorder::create(target, self.context.plan.view.clone(), now_s)?;
+        recorder.run(now_s, &self.run_message(recorder.timestamp(now_s)))?;
         self.recording = Some(Recording {
-            recorder: Recorder::create(path, &self.run_message(0.0))?,
+            recorder,
             transitions: 0,
             grasps: 0,
             misses: 0,
@@ -87,11 +110,11 @@ impl Runner {
         Ok(())
     }
 
-    /// The run's description with the plan in force at `t_s`.
-    fn run_message(&self, t_s: f64) -> RunMessage {
+    /// The run's description with the plan in force at `timestamp`.
+    fn run_message(&self, timestamp: Timestamp) -> RunMessage {
         let (record, plan) = (&self.context.record, &self.context.plan);
         RunMessage {
-            timestamp: Timestamp::of(t_s),
+            timestamp,
             task: record.task.clone(),
             cell: record.cell.clone(),
             seed: record.seed,
@@ -202,20 +225,18 @@ impl Runner {
         if let Event::Tactile { frames, .. } = event {
             recorder.tactile_frames(state, frames)?;
         }
-        if let Event::Detected(Detections {
-            image: Some(image), ..
-        }) = event
-        {
-            recorder.camera_image(now_s, image)?;
+        if let Event::Detected(detections) = event {
+            recorder.detections(now_s, detections)?;
         }
         let record = &self.context.record;
         let misses = record.touch_only.as_ref().map_or(&[][..], |t| &t.misses);
+        let plan = &self.context.plan;
         for miss in &misses[recording.misses..] {
-            recorder.grasp(miss, self.context.plan.estimator)?;
+            recorder.grasp(miss, plan.estimator, &plan.fit)?;
         }
         recording.misses = misses.len();
         for grasp in &record.grasps[recording.grasps..] {
-            recorder.grasp(grasp, self.context.plan.estimator)?;
+            recorder.grasp(grasp, plan.estimator, &plan.fit)?;
         }
         recording.grasps = record.grasps.len();
         for transition in &record.transitions[recording.transitions..] {
@@ -226,6 +247,16 @@ impl Runner {
         if new_transitions && self.machine.state().is_final() {
             recorder.outcome(record, now_s)?;
         }
+        // Where the arm is now, for `/tf` (last: the step's latest time);
+        // an arm that cannot say is asked again after the next step (its
+        // error reaches the machine through the next command).
+        let base_from_tcp = self
+            .cell
+            .arm
+            .base_from_tcp()
+            .inspect_err(|error| tracing::debug!(%error, "no arm pose for /tf"))
+            .ok();
+        recorder.frames(now_s, base_from_tcp.as_ref())?;
         if recording.flush_each_step {
             recorder.flush()?;
         }
@@ -234,10 +265,10 @@ impl Runner {
 
     /// Finishes the recording, if there is one, and returns its path.
     pub fn finish_recording(&mut self) -> Result<Option<PathBuf>, RecordingError> {
-        self.recording
-            .take()
-            .map(|recording| recording.recorder.finish())
-            .transpose()
+        match self.recording.take() {
+            Some(recording) => recording.recorder.finish(),
+            None => Ok(None),
+        }
     }
 
     /// Steps until the run is over. A recording error ends the recording,
@@ -283,11 +314,15 @@ impl Runner {
         // The machine reads the plan from the context it is lent with
         // each event: between two events it is the runner's to change.
         self.context.plan = plan;
-        let run = self.run_message(self.cell.clock.now_s());
+        let now_s = self.cell.clock.now_s();
+        let Some(timestamp) = self.recording.as_ref().map(|r| r.recorder.timestamp(now_s)) else {
+            return Ok(());
+        };
+        let run = self.run_message(timestamp);
         let Some(recording) = &mut self.recording else {
             return Ok(());
         };
-        let written = recording.recorder.run(&run);
+        let written = recording.recorder.run(now_s, &run);
         if written.is_err() {
             self.recording = None;
         }

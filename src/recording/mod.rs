@@ -1,18 +1,24 @@
 //! Recordings: every run written as an MCAP file that Foxglove opens as it
-//! is (state transitions, tactile frames raw and Δv, fits, poses, each on
-//! its own channel; see `schema`), and read back for `cablecell replay`,
-//! which can fit the recorded frames again with another estimator.
+//! is (state transitions, tactile frames raw and Δv, fits, poses, the
+//! cell's frames and a 3D scene, each on its own channel; see `schema` and
+//! `scene`), or streamed live to Foxglove over its WebSocket protocol
+//! (`live`), and read back for `cablecell replay`, which can fit the
+//! recorded frames again with another estimator.
 
+pub mod live;
 pub mod read;
 pub mod replay;
+pub mod scene;
 pub mod schema;
 pub mod write;
 
 use std::path::{Path, PathBuf};
 
+pub use live::LiveServer;
 pub use read::Recording;
+pub use scene::CellView;
 pub use schema::Topic;
-pub use write::Recorder;
+pub use write::{Recorder, RecordingTarget};
 
 /// Errors of writing and reading recordings.
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +49,23 @@ pub enum RecordingError {
         topic: &'static str,
         #[source]
         source: serde_json::Error,
+    },
+    /// One of Foxglove's protobuf messages could not be encoded (a bug).
+    #[error("{}: {topic}: {source}", path.display())]
+    Protobuf {
+        path: PathBuf,
+        topic: &'static str,
+        #[source]
+        source: prost::EncodeError,
+    },
+    /// The live view's WebSocket server could not start (the address is
+    /// taken or not this machine's: pick another with `--live ADDR`) or
+    /// refused a channel (a bug).
+    #[error("live view on {addr}: {source}")]
+    Live {
+        addr: std::net::SocketAddr,
+        #[source]
+        source: foxglove::FoxgloveError,
     },
     /// The recording has no `/run` message, so it is not one of cablecell's
     /// runs (or was cut off before its first message).

@@ -8,6 +8,9 @@ use serde::de::DeserializeOwned;
 use super::RecordingError;
 use super::schema::Topic;
 
+/// The longest record that a chunk may hold, whatever the file's length.
+const MAX_MESSAGE_BYTES: usize = 64 << 20;
+
 /// A recording's messages, in file order.
 #[derive(Debug, Clone)]
 pub struct Recording {
@@ -34,11 +37,13 @@ impl Recording {
         let complete = mcap::read::footer(&bytes).is_ok();
         // `mcap::MessageStream` sets no limit on a record's length, and a
         // corrupt length near 2^64 overflows inside the mcap crate (a
-        // panic, found by fuzzing): no record is longer than the file.
+        // panic, found by fuzzing): no record is longer than the file, or
+        // than a message in a chunk decompressed from it can be (a camera
+        // image is under 4 MB).
         let mut reader = MessageReader::new_with_options(
             LinearReaderOptions::default()
                 .with_skip_end_magic(true)
-                .with_record_length_limit(bytes.len()),
+                .with_record_length_limit(bytes.len().max(MAX_MESSAGE_BYTES)),
         );
         let mut unread = &bytes[..];
         let mut messages = Vec::new();

@@ -77,24 +77,24 @@ impl Replay {
         else {
             return Vec::new();
         };
-        let mut after_s = f64::NEG_INFINITY;
+        let mut after = None;
         self.fits
             .iter()
             .filter_map(|fit| {
-                let fit_s = seconds(fit.timestamp);
+                let judged = fit.timestamp;
                 let frames: Vec<RawFrame> = self
                     .raw
                     .iter()
                     .filter(|m| matches!(m.state.as_str(), "evaluate" | "verify"))
-                    .filter(|m| seconds(m.timestamp) > after_s && seconds(m.timestamp) <= fit_s)
+                    .filter(|m| Some(m.timestamp) > after && m.timestamp <= judged)
                     .map(|m| m.counts)
                     .collect();
-                after_s = fit_s;
+                after = Some(judged);
                 let map = bias.remove_mean(&frames)?;
                 // The plan in force when the grasp was judged.
                 let plan = std::iter::once(&self.run)
                     .chain(&self.changes)
-                    .rfind(|run| seconds(run.timestamp) <= fit_s)
+                    .rfind(|run| run.timestamp <= judged)
                     .unwrap_or(&self.run);
                 let config = FitConfig {
                     pitch_mm: plan.pitch_mm,
@@ -120,8 +120,4 @@ impl Replay {
             })
             .collect()
     }
-}
-
-fn seconds(timestamp: super::schema::Timestamp) -> f64 {
-    f64::from(timestamp.sec) + f64::from(timestamp.nsec) * 1e-9
 }

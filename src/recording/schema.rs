@@ -1,11 +1,17 @@
-//! The recording's channels and their messages: JSON, each channel with a
-//! JSON schema, Foxglove's well-known `foxglove.*` schemas where one fits,
-//! so that Foxglove opens a recording and plots it as it is.
+//! The recording's channels and their messages, each channel with
+//! Foxglove's well-known `foxglove.*` schema where one fits, so that
+//! Foxglove opens a recording, plots it and shows it in 3D as it is.
+//! cablecell's own channels are JSON with a JSON schema written here; the
+//! well-known schemas that only Foxglove reads (the frames, the 3D scene,
+//! the images drawn for it) are protobuf, encoded and described by the
+//! `foxglove` crate's types, so their schemas are Foxglove's to the byte.
 //!
 //! A new channel is one [`Topic`] variant, its row in [`Topic::ALL`] and
-//! its schema text, plus a message struct and a `Recorder` method that
-//! writes it.
+//! its schema, plus a message and a `Recorder` method that writes it.
 
+use std::borrow::Cow;
+
+use foxglove::Encode;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
@@ -35,10 +41,24 @@ pub enum Topic {
     CameraImage,
     /// Each grasp's cable shapes: seen, felt, fused and true.
     CableShapes,
+    /// The cell's frames (base, tcp, sensor, marker, camera, cable) after
+    /// every step.
+    Tf,
+    /// The 3D scene: the pad, its taxels, the cable's shapes.
+    Scene,
+    /// Every Δv frame drawn as an image, a cell a taxel.
+    TactileImage,
+    /// The paper's wire_params node for each grasp: m, n, a, b, c, the
+    /// direction, h and v.
+    WireParams,
+    /// What the detector found, drawn over the camera image.
+    CameraAnnotations,
+    /// The camera's intrinsics, with each image.
+    CameraCalibration,
 }
 
 impl Topic {
-    pub const ALL: [Topic; 10] = [
+    pub const ALL: [Topic; 16] = [
         Topic::Run,
         Topic::State,
         Topic::Log,
@@ -49,6 +69,12 @@ impl Topic {
         Topic::ArmTarget,
         Topic::CameraImage,
         Topic::CableShapes,
+        Topic::Tf,
+        Topic::Scene,
+        Topic::TactileImage,
+        Topic::WireParams,
+        Topic::CameraAnnotations,
+        Topic::CameraCalibration,
     ];
 
     pub fn name(self) -> &'static str {
@@ -63,45 +89,127 @@ impl Topic {
             Topic::ArmTarget => "/arm/target",
             Topic::CameraImage => "/camera/image",
             Topic::CableShapes => "/cable/shapes",
+            Topic::Tf => "/tf",
+            Topic::Scene => "/scene",
+            Topic::TactileImage => "/tactile/image",
+            Topic::WireParams => "/tactile/wire_params",
+            Topic::CameraAnnotations => "/camera/annotations",
+            Topic::CameraCalibration => "/camera/calibration",
         }
     }
 
-    /// The schema's name and its JSON schema.
-    pub fn schema(self) -> (&'static str, &'static str) {
+    /// The channel's schema and message encoding.
+    pub fn schema(self) -> ChannelSchema {
+        fn protobuf<T: Encode>() -> ChannelSchema {
+            // Every `foxglove::messages` type has its schema.
+            let schema = T::get_schema().unwrap_or_else(|| foxglove::Schema::new("", "", &[]));
+            ChannelSchema {
+                name: Cow::Owned(schema.name),
+                encoding: "protobuf",
+                data: schema.data,
+                message_encoding: "protobuf",
+            }
+        }
+        let json = |name: &'static str, text: &'static str| ChannelSchema {
+            name: Cow::Borrowed(name),
+            encoding: "jsonschema",
+            data: Cow::Borrowed(text.as_bytes()),
+            message_encoding: "json",
+        };
         match self {
-            Topic::Run => ("cablecell.Run", RUN_SCHEMA),
-            Topic::State => ("cablecell.Transition", TRANSITION_SCHEMA),
-            Topic::Log => ("foxglove.Log", LOG_SCHEMA),
-            Topic::TactileRaw => ("cablecell.TactileRaw", TACTILE_RAW_SCHEMA),
-            Topic::TactileDv => ("cablecell.TactileDv", TACTILE_DV_SCHEMA),
-            Topic::TactileFit => ("cablecell.TactileFit", TACTILE_FIT_SCHEMA),
-            Topic::GraspPose | Topic::ArmTarget => ("foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA),
-            Topic::CameraImage => ("foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA),
-            Topic::CableShapes => ("cablecell.CableShapes", CABLE_SHAPES_SCHEMA),
+            Topic::Run => json("cablecell.Run", RUN_SCHEMA),
+            Topic::State => json("cablecell.Transition", TRANSITION_SCHEMA),
+            Topic::Log => json("foxglove.Log", LOG_SCHEMA),
+            Topic::TactileRaw => json("cablecell.TactileRaw", TACTILE_RAW_SCHEMA),
+            Topic::TactileDv => json("cablecell.TactileDv", TACTILE_DV_SCHEMA),
+            Topic::TactileFit => json("cablecell.TactileFit", TACTILE_FIT_SCHEMA),
+            Topic::GraspPose | Topic::ArmTarget => {
+                json("foxglove.PoseInFrame", POSE_IN_FRAME_SCHEMA)
+            }
+            Topic::CameraImage => json("foxglove.CompressedImage", COMPRESSED_IMAGE_SCHEMA),
+            Topic::CableShapes => json("cablecell.CableShapes", CABLE_SHAPES_SCHEMA),
+            Topic::WireParams => json("cablecell.WireParams", WIRE_PARAMS_SCHEMA),
+            Topic::Tf => protobuf::<foxglove::messages::FrameTransforms>(),
+            Topic::Scene => protobuf::<foxglove::messages::SceneUpdate>(),
+            Topic::TactileImage => protobuf::<foxglove::messages::RawImage>(),
+            Topic::CameraAnnotations => protobuf::<foxglove::messages::ImageAnnotations>(),
+            Topic::CameraCalibration => protobuf::<foxglove::messages::CameraCalibration>(),
         }
     }
 }
 
-/// Foxglove's time: seconds and nanoseconds.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A channel's schema as MCAP and Foxglove's WebSocket protocol take it.
+#[derive(Debug, Clone)]
+pub struct ChannelSchema {
+    /// `foxglove.FrameTransforms`, `cablecell.Run`, …
+    pub name: Cow<'static, str>,
+    /// `jsonschema` or `protobuf` (a serialized `FileDescriptorSet`).
+    pub encoding: &'static str,
+    pub data: Cow<'static, [u8]>,
+    /// `json` or `protobuf`.
+    pub message_encoding: &'static str,
+}
+
+/// Foxglove's time: seconds and nanoseconds since the Unix epoch (UTC).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct Timestamp {
     pub sec: u32,
     pub nsec: u32,
 }
 
 impl Timestamp {
-    /// The cell's clock (seconds since the cell started; never negative).
-    pub fn of(t_s: f64) -> Self {
-        let ns = log_time_ns(t_s);
+    /// The time `ns` nanoseconds after the epoch.
+    pub fn of_ns(ns: u64) -> Self {
         Self {
             sec: u32::try_from(ns / 1_000_000_000).unwrap_or(u32::MAX),
             nsec: (ns % 1_000_000_000) as u32,
         }
     }
+
+    /// Nanoseconds since the epoch.
+    pub fn ns(self) -> u64 {
+        u64::from(self.sec) * 1_000_000_000 + u64::from(self.nsec)
+    }
 }
 
-/// MCAP's log time: nanoseconds on the cell's clock.
-pub fn log_time_ns(t_s: f64) -> u64 {
+impl From<Timestamp> for foxglove::messages::Timestamp {
+    fn from(t: Timestamp) -> Self {
+        // `of_ns` keeps `nsec` below a second.
+        foxglove::messages::Timestamp::new_checked(t.sec, t.nsec).unwrap_or_default()
+    }
+}
+
+/// Where a recording's times start: the wall clock (UTC) when the cell's
+/// clock read 0, so that log times are dates, on a simulated cell too,
+/// and the cell's seconds are kept exactly as offsets from it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WallClock {
+    pub cell_zero_ns: u64,
+}
+
+impl WallClock {
+    /// The wall clock now, when the cell's clock reads `cell_now_s`.
+    pub fn now(cell_now_s: f64) -> Self {
+        let now_ns = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+        Self {
+            cell_zero_ns: now_ns.saturating_sub(cell_offset_ns(cell_now_s)),
+        }
+    }
+
+    /// MCAP's log time of the cell's `t_s`: nanoseconds since the epoch.
+    pub fn log_time_ns(self, t_s: f64) -> u64 {
+        self.cell_zero_ns.saturating_add(cell_offset_ns(t_s))
+    }
+
+    pub fn timestamp(self, t_s: f64) -> Timestamp {
+        Timestamp::of_ns(self.log_time_ns(t_s))
+    }
+}
+
+/// The cell's seconds as nanoseconds (never negative).
+fn cell_offset_ns(t_s: f64) -> u64 {
     (t_s.max(0.0) * 1e9).round() as u64
 }
 
@@ -186,6 +294,32 @@ pub struct CableShapesMessage {
     pub attempt: u32,
     #[serde(flatten)]
     pub shapes: GraspShapes,
+}
+
+/// The paper's wire_params node (Section III.2) for one grasp, from the
+/// grasp's mean Δv map, whichever estimator judged it; `None` where the
+/// fit has no such number (no contact, a cable along y has no m and n,
+/// fewer than 3 centroids no quadratic).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WireParamsMessage {
+    pub timestamp: Timestamp,
+    /// 0 for the trial grasp, k for the k-th regrasp.
+    pub attempt: u32,
+    /// `horizontal` (`y = m x + n`, `y = a x² + b x + c`) or `vertical`
+    /// (`x = a y² + b y + c`).
+    pub direction: Option<String>,
+    /// eq. 2's slope and intercept (mm).
+    pub m: Option<f64>,
+    pub n_mm: Option<f64>,
+    /// eq. 3 / 4's coefficients: `a` in 1/mm, `b` none, `c` in mm.
+    pub a_per_mm: Option<f64>,
+    pub b: Option<f64>,
+    pub c_mm: Option<f64>,
+    /// The smallest column and row sums of Δv (V).
+    pub h_v: Option<f64>,
+    pub v_v: Option<f64>,
+    /// Why there are none, when the fit failed.
+    pub error: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -289,6 +423,11 @@ const COMPRESSED_IMAGE_SCHEMA: &str = schema!(
     r#""frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}"#
 );
 
+const WIRE_PARAMS_SCHEMA: &str = schema!(
+    "cablecell.WireParams",
+    r#""attempt":{"type":"integer"},"direction":{"type":["string","null"],"enum":["horizontal","vertical",null]},"m":{"type":["number","null"]},"n_mm":{"type":["number","null"]},"a_per_mm":{"type":["number","null"]},"b":{"type":["number","null"]},"c_mm":{"type":["number","null"]},"h_v":{"type":["number","null"]},"v_v":{"type":["number","null"]},"error":{"type":["string","null"]}"#
+);
+
 /// A shape: points along the cable in the base frame (mm), each with its σ.
 macro_rules! shape_schema {
     () => {
@@ -338,10 +477,16 @@ mod tests {
     fn every_schema_is_json_with_a_timestamp() {
         let time: serde_json::Value = serde_json::from_str(TIME).unwrap();
         for topic in Topic::ALL {
-            let (name, text) = topic.schema();
+            let channel = topic.schema();
+            let name = &channel.name;
+            if channel.encoding == "protobuf" {
+                assert!(name.starts_with("foxglove."), "{name}");
+                assert!(!channel.data.is_empty(), "{name}");
+                continue;
+            }
             let schema: serde_json::Value =
-                serde_json::from_str(text).unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert_eq!(schema["title"], name);
+                serde_json::from_slice(&channel.data).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(schema["title"], name.as_ref());
             assert_eq!(schema["properties"]["timestamp"], time, "{name}");
         }
     }
@@ -353,14 +498,20 @@ mod tests {
     }
 
     #[test]
-    fn timestamps_split_seconds() {
+    fn timestamps_are_the_wall_clock_plus_the_cell_clock() {
+        let clock = WallClock {
+            cell_zero_ns: 1_700_000_000_000_000_000,
+        };
         assert_eq!(
-            Timestamp::of(3.25),
+            clock.timestamp(3.25),
             Timestamp {
-                sec: 3,
+                sec: 1_700_000_003,
                 nsec: 250_000_000
             }
         );
-        assert_eq!(Timestamp::of(-1.0), Timestamp { sec: 0, nsec: 0 });
+        assert_eq!(clock.timestamp(3.25).ns(), clock.log_time_ns(3.25));
+        assert_eq!(clock.log_time_ns(-1.0), clock.cell_zero_ns);
+        let now = WallClock::now(10.0);
+        assert!(now.timestamp(10.0).sec > 1_600_000_000, "{now:?}");
     }
 }

@@ -40,12 +40,20 @@ pub fn repl(
             return Status::BadInput;
         }
     };
+    let live = match record.live_server() {
+        Ok(live) => live,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
     let pause = Arc::new(AtomicBool::new(false));
     let mut session = Session {
         cell_path: cell_path.to_owned(),
         cell,
         seed,
         record,
+        live,
         pace: (pace > 0.0).then_some(pace),
         runs: 0,
         task: None,

@@ -11,6 +11,7 @@ use cablecell::orchestrator::Runner;
 use cablecell::orchestrator::breakpoint::Breakpoints;
 use cablecell::orchestrator::driver::Driver;
 use cablecell::orchestrator::params::TaskParams;
+use cablecell::recording::LiveServer;
 
 use super::super::run::{Commentary, RecordArgs, finish_recording, start_recording};
 
@@ -20,6 +21,8 @@ pub(super) struct Session {
     pub(super) cell: CellFile,
     pub(super) seed: Option<u64>,
     pub(super) record: RecordArgs,
+    /// The live view every run of the session is served on.
+    pub(super) live: Option<Arc<LiveServer>>,
     pub(super) pace: Option<f64>,
     /// Runs recorded so far, to number the files of an explicit `--record`.
     pub(super) runs: usize,
@@ -73,7 +76,7 @@ impl Session {
             .record
             .path(&params.task().task.name, seed)
             .map(|path| numbered(&path, self.runs));
-        start_recording(&mut runner, path.as_deref());
+        start_recording(&mut runner, path.as_deref(), self.live.as_ref());
         Ok(runner)
     }
 
