@@ -1,9 +1,11 @@
-//! `cablecell campaign FILE`
+//! `cablecell campaign FILE` and `cablecell campaign merge DIR…`
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use cablecell::campaign::journal::JournalError;
+use cablecell::campaign::merge::merge as merge_shards;
 use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
-use cablecell::campaign::summary::{render_table, summarise};
+use cablecell::campaign::summary::{CampaignSummary, render_table, summarise};
 use cablecell::campaign::trial::TrialEntry;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -43,7 +45,9 @@ pub fn campaign(
                 CampaignError::Config(_)
                 | CampaignError::Exists { .. }
                 | CampaignError::SeedMismatch { .. }
-                | CampaignError::Foreign { .. } => Status::BadInput,
+                | CampaignError::Foreign { .. }
+                | CampaignError::OtherCampaign { .. }
+                | CampaignError::BadMeta { .. } => Status::BadInput,
                 _ => Status::OutputFailed,
             };
         }
@@ -56,24 +60,83 @@ pub fn campaign(
         &entries,
     );
     if json {
-        match serde_json::to_string_pretty(&summary) {
-            Ok(text) => println!("{text}"),
-            Err(error) => {
-                eprintln!("error: cannot write the summary as JSON: {error}");
-                return Status::OutputFailed;
-            }
-        }
-    } else {
-        print!("{}", render_table(&summary));
-        println!("trials recorded in {}", campaign.journal_path().display());
-        if campaign.record {
-            println!(
-                "each trial's recording in {}",
-                campaign.recordings_folder().display()
-            );
-        }
+        return print_json(&summary);
+    }
+    print!("{}", render_table(&summary));
+    if campaign.shard.count > 1 {
+        println!(
+            "shard {} of the campaign (its trials i with i mod {} = {})",
+            campaign.shard, campaign.shard.count, campaign.shard.index
+        );
+    }
+    println!("trials recorded in {}", campaign.journal_path().display());
+    if campaign.record {
+        println!(
+            "each trial's recording in {}",
+            campaign.recordings_folder().display()
+        );
     }
     Status::Success
+}
+
+/// Checks that `folders` are the shards of one campaign and prints its
+/// summary, the same as the whole campaign's; writes the merged folder to
+/// `out` if given. Anything wrong with the shards is bad input (2); only
+/// writing `out` can fail with 4.
+pub fn merge(folders: &[PathBuf], out: Option<&Path>, json: bool) -> Status {
+    let merged = match merge_shards(folders) {
+        Ok(merged) => merged,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    if let Some(out) = out
+        && let Err(error) = merged.write(out)
+    {
+        eprintln!("error: {error}");
+        return match error {
+            CampaignError::Exists { .. } | CampaignError::Journal(JournalError::AlreadyExists { .. }) => {
+                Status::BadInput
+            }
+            _ => Status::OutputFailed,
+        };
+    }
+    let meta = &merged.meta;
+    let summary = summarise(
+        &meta.name,
+        meta.seed,
+        meta.trials,
+        &meta.policies,
+        &merged.entries,
+    );
+    if json {
+        return print_json(&summary);
+    }
+    print!("{}", render_table(&summary));
+    println!(
+        "merged {} shards of campaign {} ({})",
+        folders.len(),
+        meta.name,
+        meta.identity
+    );
+    if let Some(out) = out {
+        println!("trials recorded in {}", out.join("trials.jsonl").display());
+    }
+    Status::Success
+}
+
+fn print_json(summary: &CampaignSummary) -> Status {
+    match serde_json::to_string_pretty(summary) {
+        Ok(text) => {
+            println!("{text}");
+            Status::Success
+        }
+        Err(error) => {
+            eprintln!("error: cannot write the summary as JSON: {error}");
+            Status::OutputFailed
+        }
+    }
 }
 
 /// Mean final |n| and |α| per policy, for the progress bar.
