@@ -217,7 +217,9 @@ fn shards_that_are_not_one_campaign_are_refused_by_folder_and_line() {
     // Another shard's trial in a shard's journal.
     let s0_first = std::fs::read_to_string(s0.join("trials.jsonl")).expect("journal");
     let s0_first = s0_first.lines().next().expect("a line").to_owned();
-    let stray = copy_with_journal(&s1, &dir.path().join("stray"), |j| format!("{j}{s0_first}\n"));
+    let stray = copy_with_journal(&s1, &dir.path().join("stray"), |j| {
+        format!("{j}{s0_first}\n")
+    });
     let (code, err) = merge(&[&s0, &stray, &s2]);
     assert_eq!(code, Some(2), "{err}");
     assert!(

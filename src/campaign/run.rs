@@ -158,19 +158,15 @@ pub struct Campaign {
 impl Campaign {
     pub fn load(path: &Path, overrides: Overrides) -> Result<Self, CampaignError> {
         let (file, task, cell) = load_campaign(path)?;
-        let texts = [
-            path.to_owned(),
-            file.task_path(path),
-            file.cell_path(path),
-        ]
-        .iter()
-        .map(|path| {
-            std::fs::read(path).map_err(|source| ConfigError::Read {
-                path: path.clone(),
-                source,
+        let texts = [path.to_owned(), file.task_path(path), file.cell_path(path)]
+            .iter()
+            .map(|path| {
+                std::fs::read(path).map_err(|source| ConfigError::Read {
+                    path: path.clone(),
+                    source,
+                })
             })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+            .collect::<Result<Vec<_>, _>>()?;
         let shard = overrides.shard.unwrap_or(Shard::WHOLE);
         let out = match (overrides.out, overrides.shard) {
             (Some(out), _) => out,

@@ -155,7 +155,9 @@ impl ShardMeta {
                 self.shard.count.to_string(),
             ),
         ];
-        fields.into_iter().find(|(_, found, expected)| found != expected)
+        fields
+            .into_iter()
+            .find(|(_, found, expected)| found != expected)
     }
 
     /// Reads `OUT/campaign.json`; `None` if the folder has none (a campaign
@@ -229,8 +231,13 @@ mod tests {
 
     #[test]
     fn k_of_n_parses_and_bad_ones_are_refused() {
-        assert_eq!("2/3".parse::<Shard>().ok(), Some(Shard { index: 2, count: 3 }));
-        for bad in ["3/3", "4/3", "1", "a/3", "1/b", "-1/3", "0/0", "0/10001", "1/2/3"] {
+        assert_eq!(
+            "2/3".parse::<Shard>().ok(),
+            Some(Shard { index: 2, count: 3 })
+        );
+        for bad in [
+            "3/3", "4/3", "1", "a/3", "1/b", "-1/3", "0/0", "0/10001", "1/2/3",
+        ] {
             assert!(
                 matches!(bad.parse::<Shard>(), Err(CampaignError::BadShard { .. })),
                 "{bad}"

@@ -96,9 +96,8 @@ pub fn merge(folders: &[PathBuf], out: Option<&Path>, json: bool) -> Status {
     {
         eprintln!("error: {error}");
         return match error {
-            CampaignError::Exists { .. } | CampaignError::Journal(JournalError::AlreadyExists { .. }) => {
-                Status::BadInput
-            }
+            CampaignError::Exists { .. }
+            | CampaignError::Journal(JournalError::AlreadyExists { .. }) => Status::BadInput,
             _ => Status::OutputFailed,
         };
     }
