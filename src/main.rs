@@ -12,9 +12,11 @@ use clap::{Parser, Subcommand};
 ///
 /// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
 /// the allowed regrasps, no cable on the pad); 2 bad input (command line,
-/// task, cell, campaign or map file); 3 device fault (the cell was made
-/// safe, or a bring-up command's device failed); 4 the output (a journal, a
-/// file, a folder) could not be written or read back.
+/// task, cell, campaign or map file, a task beyond its cell's limits, a
+/// model that is no network, shards that are not one campaign); 3 device
+/// fault (the cell was made safe, or a bring-up command's device failed);
+/// 4 the output (a journal, a file, a folder) could not be written or read
+/// back.
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Args {
@@ -266,7 +268,8 @@ fn pace(text: &str) -> Result<f64, String> {
 }
 
 fn shard(text: &str) -> Result<cablecell::campaign::shard::Shard, String> {
-    text.parse().map_err(|e: cablecell::campaign::run::CampaignError| e.to_string())
+    text.parse()
+        .map_err(|e: cablecell::campaign::run::CampaignError| e.to_string())
 }
 
 fn trials(text: &str) -> Result<usize, String> {

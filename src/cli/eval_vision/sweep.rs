@@ -11,7 +11,7 @@ use crate::cli::Status;
 use crate::cli::vision_io::{InstancesArg, MaskArg, VisionArgs};
 
 use super::print::print_json;
-use super::score::{evaluate, labels_own_dice};
+use super::score::{Failure, evaluate, labels_own_dice};
 use super::{EvalVisionArgs, Evaluation, Sample};
 
 /// One row of the sweep: what it changes and what it scored (`None`:
@@ -95,9 +95,9 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
         for (k, (setting, vision)) in settings.iter().enumerate() {
             let evaluation = match evaluate(vision, samples, None) {
                 Ok(evaluation) => evaluation,
-                Err(message) => {
+                Err(Failure { message, status }) => {
                     eprintln!("error: {setting}: {message}");
-                    return Status::TaskFailed;
+                    return status;
                 }
             };
             if round == 0 {
