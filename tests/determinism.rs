@@ -101,7 +101,10 @@ fn assert_reproducible(task: &str, seed: &str) {
         .fold(false, |held, report| without_wall_clock(report) | held);
     assert_eq!(parsed[0], parsed[1], "{task} seed {seed}: the reports");
     if !held_wall_clock {
-        assert_eq!(reports[0], reports[1], "byte for byte, with no wall clock in them");
+        assert_eq!(
+            reports[0], reports[1],
+            "byte for byte, with no wall clock in them"
+        );
     }
 
     let (first, second) = (channels(&first), channels(&second));

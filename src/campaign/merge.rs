@@ -34,16 +34,16 @@ pub fn merge(folders: &[PathBuf]) -> Result<Merged, CampaignError> {
         let meta = ShardMeta::read(folder)?.ok_or_else(|| CampaignError::NotAShard {
             path: folder.clone(),
         })?;
-        if let Some((first, first_folder)) = metas.first() {
-            if let Some((field, found, expected)) = first.differs(&meta) {
-                return Err(CampaignError::OtherCampaign {
-                    path: ShardMeta::path_in(folder),
-                    field,
-                    found,
-                    expected,
-                    against: ShardMeta::path_in(first_folder).display().to_string(),
-                });
-            }
+        if let Some((first, first_folder)) = metas.first()
+            && let Some((field, found, expected)) = first.differs(&meta)
+        {
+            return Err(CampaignError::OtherCampaign {
+                path: ShardMeta::path_in(folder),
+                field,
+                found,
+                expected,
+                against: ShardMeta::path_in(first_folder).display().to_string(),
+            });
         }
         if let Some((_, first)) = metas.iter().find(|(m, _)| m.shard == meta.shard) {
             return Err(CampaignError::ShardTwice {

@@ -280,6 +280,9 @@ mod tests {
         let far = [point(0.0), point(1.0), point(1e300)];
         assert!(fuse(&[&far], &Isometry3::identity()).is_none());
         let cable = [point(0.0), point(10.0), point(20.0), point(30.0)];
-        assert_eq!(fuse(&[&cable], &Isometry3::identity()).map(|s| s.len()), Some(31));
+        assert_eq!(
+            fuse(&[&cable], &Isometry3::identity()).map(|s| s.len()),
+            Some(31)
+        );
     }
 }
