@@ -11,6 +11,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::{Isometry2, Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A straight cable on the pad, as angle and signed offset.
@@ -21,12 +22,11 @@ use serde::{Deserialize, Serialize};
 /// `n_mm` from the sensor's origin along the normal (-sin α, cos α):
 /// cablecell's n, which for a cable near the x-axis is the paper's `n`
 /// (exactly `n cos α`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct LineInSensor {
     pub alpha_rad: f64,
-    /// Written `offset_mm` in the JSON outputs and recordings, which keep
-    /// their field names.
-    #[serde(rename = "offset_mm")]
+    /// Recordings of cablecell 0.1 wrote it `offset_mm`.
+    #[serde(alias = "offset_mm")]
     pub n_mm: f64,
 }
 
@@ -103,7 +103,7 @@ impl LineInSensor {
 }
 
 /// Signed error of a cable pose on the pad against the target pose.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PoseError {
     pub n_mm: f64,
     pub alpha_rad: f64,
@@ -113,6 +113,53 @@ impl PoseError {
     /// Whether both components are within the tolerance (inclusive).
     pub fn within(&self, tolerance: &PoseError) -> bool {
         self.n_mm.abs() <= tolerance.n_mm && self.alpha_rad.abs() <= tolerance.alpha_rad
+    }
+}
+
+/// A rigid transform as JSON outputs and recordings write it: the
+/// translation in millimetres and the rotation as a unit quaternion in the
+/// order x, y, z, w (nalgebra's own serialization names neither).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PoseMm {
+    pub translation_mm: [f64; 3],
+    pub rotation_xyzw: [f64; 4],
+}
+
+impl From<&Isometry3<f64>> for PoseMm {
+    fn from(pose: &Isometry3<f64>) -> Self {
+        let t = pose.translation.vector;
+        let q = pose.rotation.coords;
+        Self {
+            translation_mm: [t.x, t.y, t.z],
+            rotation_xyzw: [q.x, q.y, q.z, q.w],
+        }
+    }
+}
+
+impl From<PoseMm> for Isometry3<f64> {
+    fn from(pose: PoseMm) -> Self {
+        let [x, y, z] = pose.translation_mm;
+        let [qx, qy, qz, qw] = pose.rotation_xyzw;
+        Isometry3::from_parts(
+            Translation3::new(x, y, z),
+            UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(qw, qx, qy, qz)),
+        )
+    }
+}
+
+/// `#[serde(with = "pose_mm")]`: an `Isometry3` field written as [`PoseMm`].
+pub mod pose_mm {
+    use nalgebra::Isometry3;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    use super::PoseMm;
+
+    pub fn serialize<S: Serializer>(pose: &Isometry3<f64>, s: S) -> Result<S::Ok, S::Error> {
+        PoseMm::from(pose).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Isometry3<f64>, D::Error> {
+        PoseMm::deserialize(d).map(Isometry3::from)
     }
 }
 

@@ -78,7 +78,16 @@ enum Command {
         vision_args: cli::vision_io::VisionArgs,
     },
     /// Print the task's state machine as Graphviz DOT (`| dot -Tsvg`).
-    Graph { task: PathBuf },
+    Graph {
+        /// The task file whose machine to draw, e.g. tasks/regrasp.toml.
+        task: PathBuf,
+    },
+    /// Print the JSON Schema of a command's JSON output (docs/schemas/
+    /// holds them all).
+    JsonSchema {
+        /// Which output.
+        output: cli::json::JsonOutput,
+    },
     /// Draw a figure from a recording, as PNG or SVG.
     Plot {
         #[command(subcommand)]
@@ -127,6 +136,7 @@ enum Command {
     /// (by a warmed-up pipeline: the first image is run once beforehand,
     /// untimed, to load the network and set OpenCV up).
     Detect {
+        /// The images (PNG, JPEG, any OpenCV reads), each detected in turn.
         #[arg(required = true)]
         images: Vec<PathBuf>,
         #[command(flatten)]
@@ -180,6 +190,7 @@ enum Command {
     /// Serve an emulated device on a new pseudo-terminal, whose path is
     /// printed, until stopped.
     Emulate {
+        /// Which device to emulate.
         #[arg(value_enum)]
         device: cli::emulate::Emulated,
         /// The PG70's module id.
@@ -191,6 +202,7 @@ enum Command {
     },
     /// Validate task, cell and campaign files without running them.
     Check {
+        /// Task, cell and campaign files, each checked by its top table.
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
@@ -235,6 +247,7 @@ enum DeviceCommand {
         /// The serial port, e.g. /dev/ttyUSB0.
         #[arg(long)]
         port: String,
+        /// The link's speed, bit/s (the PG70's factory setting).
         #[arg(long, default_value_t = 9600)]
         baud: u32,
         /// The module id set in the gripper.
@@ -245,8 +258,10 @@ enum DeviceCommand {
     },
     /// The tactile finger's microcontroller.
     Tactile {
+        /// The serial port, e.g. /dev/ttyACM0.
         #[arg(long)]
         port: String,
+        /// The link's speed, bit/s (the microcontroller's firmware setting).
         #[arg(long, default_value_t = 1_000_000)]
         baud: u32,
         #[command(subcommand)]
@@ -325,6 +340,7 @@ fn main() -> ExitCode {
             vision_args,
         } => cli::replay::replay(&file, &estimator, vision.then_some(&vision_args)),
         Command::Graph { task } => cli::graph::graph(&task),
+        Command::JsonSchema { output } => cli::json::json_schema(output),
         Command::Plot { figure } => cli::plot::plot(&figure),
         Command::Campaign {
             merge: Some(CampaignCommand::Merge { folders, out, json }),
@@ -402,4 +418,35 @@ fn main() -> ExitCode {
         } => cli::tactile_fit::tactile_fit(file.as_deref(), pitch_mm, contact_threshold_v),
     };
     status.into()
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// Every argument of every command, as `COMMAND … ARGUMENT`, that
+    /// `--help` would list without a word on it.
+    fn undocumented(command: &clap::Command, path: &str, found: &mut Vec<String>) {
+        for arg in command.get_arguments() {
+            if arg.get_help().is_none() && arg.get_long_help().is_none() {
+                found.push(format!("{path} {}", arg.get_id()));
+            }
+        }
+        for sub in command.get_subcommands() {
+            let sub_path = format!("{path} {}", sub.get_name());
+            if sub.get_about().is_none() {
+                found.push(sub_path.clone());
+            }
+            undocumented(sub, &sub_path, found);
+        }
+    }
+
+    #[test]
+    fn every_argument_has_help_text() {
+        let mut command = super::Args::command();
+        command.build();
+        let mut found = Vec::new();
+        undocumented(&command, "cablecell", &mut found);
+        assert!(found.is_empty(), "arguments without help: {found:#?}");
+    }
 }

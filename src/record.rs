@@ -2,14 +2,15 @@
 //! that ends in a fault still has all it recorded up to the fault.
 
 use nalgebra::{Isometry3, Point3};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::{LineInSensor, PoseError};
+use crate::geometry::{LineInSensor, PoseError, PoseMm, pose_mm};
 use crate::hw::DeviceKind;
 use crate::perception::shape::{ShapePoint, StretchErrors};
 use crate::perception::tactile::{Estimate, TactileMap};
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct RunRecord {
     pub task: String,
     pub cell: String,
@@ -85,7 +86,7 @@ impl RunRecord {
 }
 
 /// A run that looked for the cable by touch alone, from the task's prior.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct TouchOnlyRecord {
     #[serde(flatten)]
     pub why: WhyTouchOnly,
@@ -98,7 +99,7 @@ pub struct TouchOnlyRecord {
 }
 
 /// Why the camera was not used.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[serde(tag = "why", rename_all = "snake_case")]
 pub enum WhyTouchOnly {
     /// The task asks for it (`[task] touch_only = true`).
@@ -120,7 +121,7 @@ impl std::fmt::Display for WhyTouchOnly {
     }
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct TransitionRecord {
     pub from: &'static str,
     pub to: &'static str,
@@ -128,7 +129,7 @@ pub struct TransitionRecord {
     pub t_s: f64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct StateTiming {
     pub state: &'static str,
     pub entered_s: f64,
@@ -136,12 +137,14 @@ pub struct StateTiming {
 }
 
 /// One grasp and what the pad said of it.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct GraspRecord {
     /// 0 for the trial grasp, k for the k-th regrasp.
     pub attempt: u32,
     pub t_s: f64,
     /// The arm's measured pose with the jaws closed.
+    #[serde(with = "pose_mm")]
+    #[schemars(with = "PoseMm")]
     pub base_from_tcp: Isometry3<f64>,
     /// Mean Δv over the evaluated frames.
     pub map: TactileMap,
@@ -160,10 +163,12 @@ pub struct GraspRecord {
 /// before the trial grasp, what the pad says now, both fused, as points in
 /// the base frame with their σ; on a simulated cell, the true cable and
 /// how far each shape lies from it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct GraspShapes {
     /// The pad's frame at the grasp (the arm's measured pose): the fusion
     /// and its plot work in its x–y plane, x along the pad.
+    #[serde(with = "pose_mm")]
+    #[schemars(with = "PoseMm")]
     pub base_from_sensor: Isometry3<f64>,
     /// Half the pad's side: the grasped stretch is `|x| ≤` this.
     pub pad_half_side_mm: f64,
@@ -180,12 +185,14 @@ pub struct GraspShapes {
     pub fused_from: Option<TactileShape>,
     pub fused: Option<Vec<ShapePoint>>,
     /// The true centre line from support to support (simulated cells).
+    #[serde(rename = "truth_in_base_mm")]
+    #[schemars(with = "Option<Vec<[f64; 3]>>")]
     pub truth: Option<Vec<Point3<f64>>>,
     pub errors: Option<ShapeErrors>,
 }
 
 /// Which of the pad's shapes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TactileShape {
     Linear,
@@ -196,7 +203,7 @@ pub enum TactileShape {
 /// How far each shape lies from the true cable over the grasped stretch
 /// and beyond it (simulated cells). A tactile fit is measured along its
 /// curve extended past the pad: touch alone, extrapolated.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ShapeErrors {
     /// The length measured beyond each end of the pad.
     pub beyond_mm: f64,
@@ -207,7 +214,7 @@ pub struct ShapeErrors {
     pub fused: Option<StretchErrors>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct Truth {
     pub line: LineInSensor,
     /// The true pose against the target: the error the grasp really has.
@@ -216,7 +223,7 @@ pub struct Truth {
     pub estimate_error: Option<PoseError>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum RunOutcome {
     /// The cable lies within tolerance of the target.
@@ -231,7 +238,7 @@ pub enum RunOutcome {
     },
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 #[serde(tag = "reason", rename_all = "snake_case")]
 pub enum Failure {
     /// The detector found no cable.
@@ -291,7 +298,7 @@ impl std::fmt::Display for Failure {
 }
 
 /// The record with the per-state timings, as `--json` prints it.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, JsonSchema)]
 pub struct RunReport<'a> {
     #[serde(flatten)]
     pub record: &'a RunRecord,

@@ -211,6 +211,7 @@ fn the_json_summary_has_every_stage_and_rate() {
     ]);
     assert_eq!(out.status.code(), Some(0));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    common::assert_follows_schema("campaign", &summary);
     assert_eq!(summary["trials"], 8);
     let paper = &summary["policies"][0];
     assert_eq!(paper["policy"], "paper");

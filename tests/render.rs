@@ -268,7 +268,9 @@ fn a_data_set_has_the_cables_dev_layout() {
         max_diameter_px: 9.0,
         ..SceneOptions::default()
     };
-    write_dataset(dir.path(), 3, 11, &options).unwrap();
+    let mut ticks = 0;
+    write_dataset(dir.path(), 3, 11, &options, || ticks += 1).unwrap();
+    assert_eq!(ticks, 3);
     let mut expected = Vec::new();
     for i in 0..3 {
         let stem = format!("{i:05}");
@@ -304,7 +306,7 @@ fn a_data_set_has_the_cables_dev_layout() {
 
     // Image i does not depend on how many are written.
     let again = tempfile::tempdir().unwrap();
-    write_dataset(again.path(), 2, 11, &options).unwrap();
+    write_dataset(again.path(), 2, 11, &options, || {}).unwrap();
     for name in ["00001.txt", "00001_mask_all.png"] {
         assert_eq!(
             std::fs::read(dir.path().join(name)).unwrap(),

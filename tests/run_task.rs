@@ -176,6 +176,8 @@ fn run_json_is_one_report_with_outcome_timings_errors_and_seed() {
     let out = common::cablecell(&["run", "tasks/regrasp.toml", "--seed", "3", "--json"]);
     assert_eq!(out.status.code(), Some(0));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    common::assert_follows_schema("run", &report);
+    assert_eq!(report["schema_version"], 1);
     assert_eq!(report["seed"], 3);
     assert_eq!(report["outcome"]["kind"], "success");
     let states = report["states"].as_array().expect("states");

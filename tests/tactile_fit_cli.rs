@@ -53,12 +53,13 @@ fn a_cable_across_the_middle_row_is_horizontal_through_the_centre() {
         String::from_utf8_lossy(&out.stderr)
     );
     let fit: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    common::assert_follows_schema("tactile-fit", &fit);
     assert_eq!(fit["direction"], "horizontal");
     assert_eq!(fit["centroids"].as_array().map(Vec::len), Some(5));
     assert!(fit["line"]["alpha_rad"].as_f64().expect("alpha").abs() < 1e-9);
-    assert!(fit["line"]["offset_mm"].as_f64().expect("offset").abs() < 1e-9);
+    assert!(fit["line"]["n_mm"].as_f64().expect("offset").abs() < 1e-9);
     assert!(fit["slope_m"].as_f64().expect("m").abs() < 1e-9);
-    assert!(fit["quadratic"]["a"].as_f64().expect("a").abs() < 1e-9);
+    assert!(fit["quadratic"]["a_per_mm"].as_f64().expect("a").abs() < 1e-9);
 }
 
 #[test]
@@ -84,7 +85,7 @@ fn a_cable_down_the_last_column_is_vertical_and_finite() {
         "{alpha}"
     );
     // x = +2 pitches; the normal of a line at +π/2 is -x.
-    let offset = fit["line"]["offset_mm"].as_f64().expect("offset");
+    let offset = fit["line"]["n_mm"].as_f64().expect("offset");
     assert!((offset + 7.1).abs() < 1e-9, "{offset}");
     assert!(fit["slope_m"].is_null(), "no slope for a vertical cable");
 }

@@ -331,7 +331,7 @@ fn detect_with_a_calibrated_cell_gives_grasp_frames_in_the_base_frame() {
         "--mask",
         "network",
     ];
-    let reports = json_of(&[&args[..], &["--json"]].concat());
+    let reports = &json_of(&[&args[..], &["--json"]].concat())["images"];
     let frames = reports[0]["grasp_frames_in_base"]
         .as_array()
         .expect("frames");

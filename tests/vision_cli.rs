@@ -62,7 +62,8 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         "--overlay",
         text(&overlay),
     ]);
-    let report = &reports[0];
+    common::assert_follows_schema("detect", &reports);
+    let report = &reports["images"][0];
     assert_eq!(report["mask_used"], "classical");
     assert_eq!(report["plain_background"], true);
     let cables = report["cables"].as_array().expect("cables");
@@ -77,10 +78,10 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         "{direction} vs {expected}"
     );
     let stages = |report: &serde_json::Value| -> Vec<String> {
-        let timings = report["timings_ms"].as_array().expect("timings");
+        let timings = report["stages"].as_array().expect("timings");
         timings
             .iter()
-            .map(|t| t[0].as_str().expect("stage").to_owned())
+            .map(|t| t["stage"].as_str().expect("stage").to_owned())
             .collect()
     };
     assert!(stages(report).contains(&"instance_masks".to_owned()));
@@ -92,7 +93,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     assert!(overlay.join("one.png").is_file());
 
     // Without `--masks` no cable's mask is drawn.
-    let reports = json_of(&["detect", text(&image), "--json"]);
+    let reports = &json_of(&["detect", text(&image), "--json"])["images"];
     assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(1));
     assert_eq!(stages(&reports[0]).len(), 4, "{:?}", stages(&reports[0]));
     assert!(!stages(&reports[0]).contains(&"instance_masks".to_owned()));
@@ -159,7 +160,7 @@ fn detect_works_on_a_finer_image_at_the_working_width() {
             "0",
         ];
         args.extend_from_slice(extra);
-        let report = json_of(&args)[0].clone();
+        let report = json_of(&args)["images"][0].clone();
         let g = &report["cables"][0]["grasp_px"];
         let at = [0, 1].map(|i| g[i].as_f64().expect("grasp point"));
         (report["work_scale"].as_f64().expect("work_scale"), at)
@@ -180,7 +181,10 @@ fn detect_reports_no_cable_and_refuses_what_is_not_an_image() {
     let out = cablecell(&["detect", text(&empty), "--json"]);
     assert_eq!(out.status.code(), Some(0));
     let reports: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(0));
+    assert_eq!(
+        reports["images"][0]["cables"].as_array().map(Vec::len),
+        Some(0)
+    );
 
     let bogus = dir.path().join("bogus.png");
     std::fs::write(&bogus, "not a picture").expect("write");
@@ -331,9 +335,9 @@ fn detect_finds_the_network_from_any_working_directory() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{stderr}");
     let found: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(found[0]["mask_used"], "network", "{found}");
+    assert_eq!(found["images"][0]["mask_used"], "network", "{found}");
     assert_eq!(
-        found[0]["cables"].as_array().map(Vec::len),
+        found["images"][0]["cables"].as_array().map(Vec::len),
         Some(1),
         "{found}"
     );
@@ -392,6 +396,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         true,
     );
     let e = json_of(&["eval-vision", text(dir.path()), "--json"]);
+    common::assert_follows_schema("eval-vision", &e);
     assert_eq!(e["images"], 2);
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
     assert_eq!(e["count_right"]["successes"], 2, "{e}");

@@ -190,6 +190,7 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         String::from_utf8_lossy(&eval.stderr)
     );
     let e: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("JSON");
+    common::assert_follows_schema("eval-vision", &e);
     assert_eq!(e["images"], 2, "{e}");
     let stems: Vec<&str> = e["per_image"]
         .as_array()
@@ -236,7 +237,9 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         "{}",
         String::from_utf8_lossy(&sweep.stderr)
     );
-    let rows: serde_json::Value = serde_json::from_slice(&sweep.stdout).expect("JSON");
+    let sweep: serde_json::Value = serde_json::from_slice(&sweep.stdout).expect("JSON");
+    common::assert_follows_schema("eval-vision-sweep", &sweep);
+    let rows = &sweep["rows"];
     let settings: Vec<&str> = rows
         .as_array()
         .expect("rows")

@@ -1,6 +1,8 @@
 //! Summary statistics of a campaign: how a measured value spreads over the
 //! trials, and how sure a success rate is given the number of trials.
 
+use schemars::JsonSchema;
+
 /// z for a two-sided 95 % interval: the 0.975 quantile of the standard
 /// normal distribution.
 const Z_95: f64 = 1.959963984540054;
@@ -13,7 +15,7 @@ const Z_95: f64 = 1.959963984540054;
 /// x₀ ≤ … ≤ xₙ₋₁ and a probability p, h = (n − 1)·p and
 /// Q(p) = x⌊h⌋ + (h − ⌊h⌋)·(x⌊h⌋₊₁ − x⌊h⌋). Reports can then be checked
 /// against either tool.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, JsonSchema)]
 pub struct Summary {
     pub count: usize,
     pub mean: f64,
@@ -81,6 +83,17 @@ fn mean_ci95(mean: f64, std_dev: f64, count: usize) -> Option<[f64; 2]> {
     Some([mean - half, mean + half])
 }
 
+/// The least value, the quartiles (type 7, as [`Summary`]'s) and the
+/// greatest: what a box plot draws. `None` as [`Summary::of`] gives it.
+pub fn five_numbers(values: &[f64]) -> Option<[f64; 5]> {
+    if values.is_empty() || values.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    Some([0.0, 0.25, 0.5, 0.75, 1.0].map(|p| quantile_type7(&sorted, p)))
+}
+
 /// The type-7 quantile of non-empty, ascending `sorted` at `p` in [0, 1].
 fn quantile_type7(sorted: &[f64], p: f64) -> f64 {
     let last = sorted.len() - 1;
@@ -95,7 +108,7 @@ fn quantile_type7(sorted: &[f64], p: f64) -> f64 {
 /// Wilson rather than the normal approximation p ± z·√(p(1−p)/n): the latter
 /// collapses to a zero-width interval at 0/n and n/n and leaves [0, 1] for
 /// small n, which is exactly where a short campaign lands.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, JsonSchema)]
 pub struct Rate {
     pub successes: usize,
     pub trials: usize,
@@ -138,6 +151,17 @@ impl Rate {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn five_numbers_are_the_box_plots() {
+        // [1, 2, 3, 4, 10]: h = 4 · p lands on x₁, x₂, x₃ exactly.
+        assert_eq!(
+            five_numbers(&[10.0, 1.0, 4.0, 2.0, 3.0]),
+            Some([1.0, 2.0, 3.0, 4.0, 10.0])
+        );
+        assert_eq!(five_numbers(&[]), None);
+        assert_eq!(five_numbers(&[1.0, f64::NAN]), None);
+    }
 
     #[test]
     fn summary_matches_hand_computation() {

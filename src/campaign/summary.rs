@@ -1,6 +1,7 @@
 //! A campaign's summary: error statistics at every grasp, success rates,
 //! regrasps and time per trial, per policy.
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::stats::{Rate, Summary};
@@ -9,7 +10,7 @@ use crate::geometry::PoseError;
 use crate::perception::shape::{Distances, StretchErrors};
 use crate::record::ShapeErrors;
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct CampaignSummary {
     pub name: String,
     pub seed: u64,
@@ -17,7 +18,7 @@ pub struct CampaignSummary {
     pub policies: Vec<PolicySummary>,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct PolicySummary {
     pub policy: String,
     pub trials: usize,
@@ -44,7 +45,7 @@ pub struct PolicySummary {
 
 /// The mean distance of each shape of the cable from the true one, over
 /// the grasped stretch (the pad) and beyond it, across trials.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct ShapeErrorSummary {
     /// The length measured beyond each end of the pad.
     pub beyond_mm: f64,
@@ -55,7 +56,7 @@ pub struct ShapeErrorSummary {
 
 /// A shape's mean distance from the true cable, in mm, over the trials
 /// that had it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, JsonSchema)]
 pub struct StretchSummary {
     pub grasped_mm: Option<Summary>,
     pub beyond_mm: Option<Summary>,
@@ -87,7 +88,7 @@ impl ShapeErrorSummary {
 }
 
 /// |n| and |α| over the trials that reached a stage.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, JsonSchema)]
 pub struct StageSummary {
     pub stage: String,
     pub n_mm: Option<Summary>,

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::RngExt;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::cell::CellFile;
@@ -32,7 +33,7 @@ pub fn trial_seed(campaign_seed: u64, index: usize) -> u64 {
 }
 
 /// The values one trial runs with.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Perturbation {
     pub start_offset_mm: f64,
     pub start_angle_rad: f64,
@@ -98,7 +99,7 @@ impl Perturbation {
 }
 
 /// A trial as the journal keeps it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct TrialEntry {
     pub campaign_seed: u64,
     pub trial: usize,
@@ -130,7 +131,7 @@ pub struct TrialEntry {
     pub shape_errors: Option<ShapeErrors>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum TrialOutcome {
     Success,
@@ -138,7 +139,7 @@ pub enum TrialOutcome {
     Fault,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct GraspResult {
     pub estimate: Option<LineInSensor>,
     pub truth: Option<LineInSensor>,

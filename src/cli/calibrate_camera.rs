@@ -1,6 +1,7 @@
 //! `cablecell calibrate-camera`: the camera's pose in the base frame from
 //! the marker on the finger (the paper's Fig. 2), stored in the cell file.
 
+use crate::cli::output::outln;
 use std::path::Path;
 
 use cablecell::cell::CellDevices;
@@ -79,7 +80,7 @@ pub fn calibrate_camera(cell_path: &Path, seed: u64, speed_mm_s: f64, dry_run: b
     if let CameraBackend::Sim(sim) = &file.camera.backend {
         let truth = sim.base_from_camera.isometry();
         let estimate = calibration.base_from_camera;
-        println!(
+        outln!(
             "  against the simulated camera's true pose: {:.3} mm, {:.4}°",
             (estimate.translation.vector - truth.translation.vector).norm(),
             (truth.rotation.inverse() * estimate.rotation)
@@ -92,7 +93,7 @@ pub fn calibrate_camera(cell_path: &Path, seed: u64, speed_mm_s: f64, dry_run: b
     }
     match store(cell_path, &calibration) {
         Ok(()) => {
-            println!("stored in {} [camera.calibration]", cell_path.display());
+            outln!("stored in {} [camera.calibration]", cell_path.display());
             Status::Success
         }
         Err(error) => {
@@ -109,10 +110,10 @@ fn print_calibration(calibration: &CameraCalibration, views: usize) {
     let frame = FrameConfig::from_isometry(&calibration.base_from_camera);
     let [x, y, z] = frame.translation_mm;
     let [roll, pitch, yaw] = frame.rotation_rpy_rad;
-    println!("camera calibrated from {views} view(s) of the marker");
-    println!("  base_from_camera translation [{x:.3}, {y:.3}, {z:.3}] mm");
-    println!("                   rotation rpy [{roll:.6}, {pitch:.6}, {yaw:.6}] rad");
-    println!(
+    outln!("camera calibrated from {views} view(s) of the marker");
+    outln!("  base_from_camera translation [{x:.3}, {y:.3}, {z:.3}] mm");
+    outln!("                   rotation rpy [{roll:.6}, {pitch:.6}, {yaw:.6}] rad");
+    outln!(
         "  reprojection error {:.3} px (RMS over the marker's corners)",
         calibration.reprojection_error_px
     );

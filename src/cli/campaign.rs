@@ -2,14 +2,13 @@
 
 use std::path::{Path, PathBuf};
 
+use super::output::{out, outln};
+use super::{Status, progress};
 use cablecell::campaign::journal::JournalError;
 use cablecell::campaign::merge::merge as merge_shards;
 use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
-use cablecell::campaign::summary::{CampaignSummary, render_table, summarise};
+use cablecell::campaign::summary::{render_table, summarise};
 use cablecell::campaign::trial::TrialEntry;
-use indicatif::{ProgressBar, ProgressStyle};
-
-use super::Status;
 
 pub fn campaign(
     path: &Path,
@@ -26,10 +25,7 @@ pub fn campaign(
         }
     };
     let policies = campaign.policy_names();
-    let bar = ProgressBar::new((campaign.trials * policies.len()) as u64).with_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} trials {elapsed}  {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = progress::bar(campaign.trials * policies.len(), "trials");
     let mut means = RunningMeans::new(&policies);
     let result = campaign.run(resume, threads, |entry| {
         means.add(entry);
@@ -60,18 +56,20 @@ pub fn campaign(
         &entries,
     );
     if json {
-        return print_json(&summary);
+        return super::json::print(&summary);
     }
-    print!("{}", render_table(&summary));
+    out!("{}", render_table(&summary));
     if campaign.shard.count > 1 {
-        println!(
+        outln!(
             "shard {} of the campaign (its trials i with i mod {} = {})",
-            campaign.shard, campaign.shard.count, campaign.shard.index
+            campaign.shard,
+            campaign.shard.count,
+            campaign.shard.index
         );
     }
-    println!("trials recorded in {}", campaign.journal_path().display());
+    outln!("trials recorded in {}", campaign.journal_path().display());
     if campaign.record {
-        println!(
+        outln!(
             "each trial's recording in {}",
             campaign.recordings_folder().display()
         );
@@ -110,32 +108,19 @@ pub fn merge(folders: &[PathBuf], out: Option<&Path>, json: bool) -> Status {
         &merged.entries,
     );
     if json {
-        return print_json(&summary);
+        return super::json::print(&summary);
     }
-    print!("{}", render_table(&summary));
-    println!(
+    out!("{}", render_table(&summary));
+    outln!(
         "merged {} shards of campaign {} ({})",
         folders.len(),
         meta.name,
         meta.identity
     );
     if let Some(out) = out {
-        println!("trials recorded in {}", out.join("trials.jsonl").display());
+        outln!("trials recorded in {}", out.join("trials.jsonl").display());
     }
     Status::Success
-}
-
-fn print_json(summary: &CampaignSummary) -> Status {
-    match serde_json::to_string_pretty(summary) {
-        Ok(text) => {
-            println!("{text}");
-            Status::Success
-        }
-        Err(error) => {
-            eprintln!("error: cannot write the summary as JSON: {error}");
-            Status::OutputFailed
-        }
-    }
 }
 
 /// Mean final |n| and |α| per policy, for the progress bar.

@@ -1,5 +1,6 @@
 //! `cablecell check FILE...`
 
+use crate::cli::output::outln;
 use std::path::PathBuf;
 
 use cablecell::task::check_file;
@@ -10,7 +11,7 @@ pub fn check(files: &[PathBuf]) -> Status {
     let mut status = Status::Success;
     for file in files {
         match check_file(file) {
-            Ok(kind) => println!("{}: ok ({kind})", file.display()),
+            Ok(kind) => outln!("{}: ok ({kind})", file.display()),
             Err(error) => {
                 eprintln!("error: {error}");
                 status = Status::BadInput;

@@ -13,30 +13,49 @@ use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
 use cablecell::schema::FrameConfig;
 use opencv::core::Mat;
+use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::Status;
+use super::output::outln;
+use super::progress;
 use super::vision_io::{VisionArgs, create_dir, draw_overlay, write_png};
+use super::{Status, output};
 
-/// What `detect --json` prints per image.
-#[derive(Serialize)]
-struct ImageReport<'a> {
+/// What `detect --json` prints.
+#[derive(Serialize, JsonSchema)]
+pub struct DetectReport {
+    /// One report per image read, in the order given.
+    pub images: Vec<ImageReport>,
+}
+
+/// What `detect` found in one image.
+#[derive(Serialize, JsonSchema)]
+pub struct ImageReport {
     image: String,
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
     /// The image's size as worked on over its own.
     work_scale: f64,
-    cables: &'a [CableInstance],
+    cables: Vec<CableInstance>,
     /// Per cable, its grasp frame in the base frame, when the cell's camera
     /// is calibrated.
     grasp_frames_in_base: Vec<Option<GraspInBase>>,
-    timings_ms: Vec<(&'static str, f64)>,
+    /// Each stage's time, in the order run.
+    stages: Vec<StageTime>,
     total_ms: f64,
-    notes: &'a [String],
+    notes: Vec<String>,
 }
 
-/// A grasp frame in the base frame, as cell files write poses.
-#[derive(Serialize)]
+/// How long one stage of the pipeline took.
+#[derive(Serialize, JsonSchema)]
+struct StageTime {
+    stage: &'static str,
+    ms: f64,
+}
+
+/// A grasp frame in the base frame, as cell files write poses (roll,
+/// pitch, yaw about the fixed x, y, z axes).
+#[derive(Serialize, JsonSchema)]
 struct GraspInBase {
     translation_mm: [f64; 3],
     rotation_rpy_rad: [f64; 3],
@@ -82,7 +101,12 @@ pub fn detect(
     let mut reports = Vec::new();
     let mut status = Status::Success;
     let mut warmed_up = false;
+    let bar = progress::bar(images.len(), "images");
     for path in images {
+        bar.inc(1);
+        if output::closed() {
+            break;
+        }
         let image = match read_image(path) {
             Ok(image) => image,
             Err(error) => {
@@ -99,10 +123,10 @@ pub fn detect(
             let start = Instant::now();
             let _ = pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork));
             if !json {
-                println!(
+                bar.suspend(|| outln!(
                     "start-up: {:.1} ms (the first image run once, untimed: one-off set-up such as loading the network)",
                     start.elapsed().as_secs_f64() * 1e3
-                );
+                ));
             }
         }
         let output = match pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork)) {
@@ -129,7 +153,7 @@ pub fn detect(
             mask_used: output.mask_used,
             plain_background: output.plain_background,
             work_scale: output.work_scale,
-            cables: &output.cables,
+            cables: output.cables.clone(),
             grasp_frames_in_base: output
                 .cables
                 .iter()
@@ -143,23 +167,25 @@ pub fn detect(
                     })
                 })
                 .collect(),
-            timings_ms: output.timings_ms.clone(),
+            stages: output
+                .timings_ms
+                .iter()
+                .map(|&(stage, ms)| StageTime { stage, ms })
+                .collect(),
             total_ms: output.timings_ms.iter().map(|(_, ms)| ms).sum(),
-            notes: &output.notes,
+            notes: output.notes.clone(),
         };
         if json {
-            match serde_json::to_value(&report) {
-                Ok(value) => reports.push(value),
-                Err(error) => eprintln!("error: cannot write the report as JSON: {error}"),
-            }
+            reports.push(report);
         } else {
-            print_report(&report);
+            bar.suspend(|| print_report(&report));
         }
     }
+    bar.finish_and_clear();
     if json {
-        match serde_json::to_string_pretty(&reports) {
-            Ok(text) => println!("{text}"),
-            Err(error) => eprintln!("error: cannot write the report as JSON: {error}"),
+        let printed = super::json::print(DetectReport { images: reports });
+        if status == Status::Success {
+            status = printed;
         }
     }
     status
@@ -180,11 +206,11 @@ fn points_text(points_px: &[[f64; 2]]) -> String {
 
 fn print_report(report: &ImageReport) {
     let stages: Vec<String> = report
-        .timings_ms
+        .stages
         .iter()
-        .map(|(stage, ms)| format!("{stage} {ms:.1}"))
+        .map(|StageTime { stage, ms }| format!("{stage} {ms:.1}"))
         .collect();
-    println!(
+    outln!(
         "{}: {} cable(s), {:?} mask{}{}, {:.1} ms ({} ms)",
         report.image,
         report.cables.len(),
@@ -203,31 +229,31 @@ fn print_report(report: &ImageReport) {
         stages.join(", ")
     );
     for (k, cable) in report.cables.iter().enumerate() {
-        println!(
+        outln!(
             "  cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {} control points",
             cable.grasp_px[0],
             cable.grasp_px[1],
             cable.direction_rad,
             cable.spline.control_points.len()
         );
-        println!(
+        outln!(
             "    control points (px): {}",
             points_text(&cable.spline.control_points)
         );
-        println!(
+        outln!(
             "    along it (px), s = 0, 0.1, ..., 1: {}",
             points_text(&cable.spline.sample(SAMPLES_PRINTED))
         );
         if let Some(Some(frame)) = report.grasp_frames_in_base.get(k) {
             let [x, y, z] = frame.translation_mm;
             let [roll, pitch, yaw] = frame.rotation_rpy_rad;
-            println!(
+            outln!(
                 "    grasp frame in base: [{x:.1}, {y:.1}, {z:.1}] mm, rpy [{roll:+.4}, {pitch:+.4}, {yaw:+.4}] rad"
             );
         }
     }
-    for note in report.notes {
-        println!("  note: {note}");
+    for note in &report.notes {
+        outln!("  note: {note}");
     }
 }
 

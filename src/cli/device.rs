@@ -2,6 +2,7 @@
 //! arm --address HOST ...`: bring-up commands that talk to one device and
 //! print what it answered.
 
+use crate::cli::output::outln;
 use std::time::{Duration, Instant};
 
 use cablecell::hw::clock::MonotonicClock;
@@ -24,6 +25,7 @@ pub enum GripperAction {
     /// Move the jaws to an opening, at the module's own speed and
     /// acceleration unless both are given.
     MovePos {
+        /// The opening to move the jaws to, mm.
         #[arg(value_parser = opening_mm)]
         opening_mm: f64,
         /// Jaw speed, mm/s (with --accel).
@@ -35,9 +37,11 @@ pub enum GripperAction {
     },
     /// Close with a motor current until blocked.
     Grip {
+        /// The motor current to close with, A.
         #[arg(value_parser = current_a)]
         current_a: f64,
     },
+    /// Stop the jaws where they are.
     Stop,
     /// Acknowledge an error.
     Ack,
@@ -51,8 +55,10 @@ pub enum TactileAction {
     Count,
     /// Read samples: the raw map, the bias-removed map, the sample rate.
     Read {
+        /// How many frames to read.
         #[arg(long, default_value_t = 100, value_parser = samples)]
         samples: usize,
+        /// Print the reading as JSON (`cablecell json-schema device-tactile-read`).
         #[arg(long)]
         json: bool,
     },
@@ -91,9 +97,13 @@ pub enum ArmAction {
     /// keeping its orientation: at most 50 mm, at most 20 mm/s.
     #[command(allow_negative_numbers = true)]
     MoveRel {
+        /// Along the base's x, mm.
         dx_mm: f64,
+        /// Along the base's y, mm.
         dy_mm: f64,
+        /// Along the base's z, mm.
         dz_mm: f64,
+        /// The TCP's speed along the line, mm/s.
         #[arg(long = "speed", value_name = "MM_S", default_value_t = 10.0)]
         speed_mm_s: f64,
     },
@@ -268,62 +278,91 @@ pub fn tactile(port: &str, baud: u32, action: &TactileAction) -> Status {
     let result = match action {
         TactileAction::Id => sensor.id(),
         TactileAction::Count => sensor.count().map(|n| n.to_string()),
-        TactileAction::Read { samples, json } => read(&mut sensor, *samples, *json),
+        TactileAction::Read { samples, json } => match read(&mut sensor, *samples) {
+            Ok(reading) if *json => return super::json::print(reading),
+            reading => reading.map(|reading| reading.text()),
+        },
     };
     report(result)
+}
+
+/// What `device tactile … read` found; `--json` prints it as it is.
+#[derive(serde::Serialize, schemars::JsonSchema)]
+pub struct TactileReading {
+    samples: usize,
+    /// Frames read per second over the whole read.
+    rate_hz: f64,
+    /// The last frame, taxels c11 … c55 row by row.
+    raw_v: [[f64; 5]; 5],
+    /// The last frame less the bias of the first frames (up to the
+    /// paper's 50).
+    dv_v: [[f64; 5]; 5],
+    /// How many frames the bias was measured from.
+    bias_samples: usize,
 }
 
 fn read(
     sensor: &mut RemodelTactile<TTYPort>,
     samples: usize,
-    json: bool,
-) -> Result<String, cablecell::hw::DeviceError> {
+) -> Result<TactileReading, cablecell::hw::DeviceError> {
     let started = Instant::now();
     let frames: Vec<RawFrame> = (0..samples)
         .map(|_| sensor.sample())
         .collect::<Result<_, _>>()?;
     let rate_hz = samples as f64 / started.elapsed().as_secs_f64();
-    let mut estimator = BiasEstimator::new(PAPER_BIAS_SAMPLES.min(samples));
+    let bias_samples = PAPER_BIAS_SAMPLES.min(samples);
+    let mut estimator = BiasEstimator::new(bias_samples);
     let bias = frames.iter().find_map(|f| estimator.push(f));
     let last = frames[frames.len() - 1];
-    let raw_v: Vec<f64> = last.iter().map(|&r| raw_to_volts(r)).collect();
-    let dv_v = bias.map(|b| b.remove(&last).dv_v);
-    if json {
-        let value = serde_json::json!({ "samples": samples, "rate_hz": rate_hz, "raw_v": raw_v, "dv_v": dv_v });
-        return Ok(value.to_string());
-    }
-    let mut text = format!("{samples} samples at {rate_hz:.0} Hz\nraw (V), last sample:\n");
-    for row in raw_v.chunks(5) {
-        text += &format!(
-            "  {}\n",
-            row.iter()
-                .map(|v| format!("{v:6.3}"))
-                .collect::<Vec<_>>()
-                .join(" ")
+    let raw_v =
+        std::array::from_fn(|row| std::array::from_fn(|col| raw_to_volts(last[5 * row + col])));
+    // `samples` ≥ 1 and the estimator wants at most that many frames.
+    let dv_v = bias.map_or([[0.0; 5]; 5], |b| b.remove(&last).dv_v);
+    Ok(TactileReading {
+        samples,
+        rate_hz,
+        raw_v,
+        dv_v,
+        bias_samples,
+    })
+}
+
+impl TactileReading {
+    /// For a person: the rate, then both maps, a row a line.
+    fn text(&self) -> String {
+        let rows = |map: &[[f64; 5]; 5], sign: bool| -> String {
+            map.iter()
+                .map(|row| {
+                    let cells: Vec<String> = row
+                        .iter()
+                        .map(|v| {
+                            if sign {
+                                format!("{v:+6.3}")
+                            } else {
+                                format!("{v:6.3}")
+                            }
+                        })
+                        .collect();
+                    format!("  {}\n", cells.join(" "))
+                })
+                .collect()
+        };
+        let text = format!(
+            "{} samples at {:.0} Hz\nraw (V), last sample:\n{}Δv (V), bias from the first {} samples:\n{}",
+            self.samples,
+            self.rate_hz,
+            rows(&self.raw_v, false),
+            self.bias_samples,
+            rows(&self.dv_v, true)
         );
+        text.trim_end().to_owned()
     }
-    if let Some(dv) = dv_v {
-        text += &format!(
-            "Δv (V), bias from the first {} samples:\n",
-            PAPER_BIAS_SAMPLES.min(samples)
-        );
-        for row in dv {
-            text += &format!(
-                "  {}\n",
-                row.iter()
-                    .map(|v| format!("{v:+6.3}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            );
-        }
-    }
-    Ok(text.trim_end().to_owned())
 }
 
 fn report(result: Result<String, cablecell::hw::DeviceError>) -> Status {
     match result {
         Ok(text) => {
-            println!("{text}");
+            outln!("{text}");
             Status::Success
         }
         Err(error) => {

@@ -2,6 +2,7 @@
 //! pseudo-terminal, for trying the bring-up commands and the cell without
 //! hardware.
 
+use crate::cli::output::outln;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 
@@ -18,7 +19,9 @@ use super::Status;
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
 pub enum Emulated {
+    /// The Schunk PG70 gripper, speaking SMP.
     Pg70,
+    /// The tactile finger's microcontroller, with the simulated pad.
     Tactile,
 }
 
@@ -82,7 +85,7 @@ pub fn emulate(device: Emulated, module_id: u8, cell: &std::path::Path) -> Statu
 }
 
 fn announce(path: &str, what: &str) {
-    println!("{path}");
+    outln!("{path}");
     let _ = std::io::stdout().flush();
     eprintln!("emulating {what} on {path}; Ctrl-C stops it");
 }

@@ -1,5 +1,6 @@
 //! `cablecell graph TASK`
 
+use crate::cli::output::out;
 use std::path::Path;
 
 use cablecell::orchestrator::graph::dot;
@@ -10,7 +11,7 @@ use super::Status;
 pub fn graph(task_path: &Path) -> Status {
     match load_task(task_path) {
         Ok(task) => {
-            print!("{}", dot(&task));
+            out!("{}", dot(&task));
             Status::Success
         }
         Err(error) => {

@@ -2,12 +2,13 @@
 //! truth, in the layout of cables-dev, for training the segmentation
 //! network and for scoring the pipeline with `eval-vision`.
 
+use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 
 use cablecell::sim::render::{BackgroundChoice, SceneOptions, write_dataset};
 use clap::Args;
 
-use super::{Status, number_within};
+use super::{Status, number_within, progress};
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderDatasetArgs {
@@ -24,8 +25,10 @@ pub struct RenderDatasetArgs {
     /// What the cables lie on.
     #[arg(long, value_enum, default_value = "any")]
     pub backgrounds: BackgroundArg,
+    /// Each image's width, pixels.
     #[arg(long, default_value_t = 640, value_parser = side_px)]
     pub width_px: i32,
+    /// Each image's height, pixels.
     #[arg(long, default_value_t = 480, value_parser = side_px)]
     pub height_px: i32,
     /// Fewest cables per image.
@@ -84,9 +87,12 @@ pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
         eprintln!("error: {}: {reason}", args.out.display());
         return Status::BadInput;
     }
-    match write_dataset(&args.out, args.count, args.seed, &options) {
+    let bar = progress::bar(args.count, "images");
+    let written = write_dataset(&args.out, args.count, args.seed, &options, || bar.inc(1));
+    bar.finish_and_clear();
+    match written {
         Ok(()) => {
-            println!(
+            outln!(
                 "{}: {} images, seed {}",
                 args.out.display(),
                 args.count,

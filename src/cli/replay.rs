@@ -1,5 +1,6 @@
 //! `cablecell replay FILE`
 
+use crate::cli::output::{out, outln};
 use std::path::Path;
 
 use cablecell::geometry::LineInSensor;
@@ -23,7 +24,7 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
         }
     };
     if let Some(why) = &recording.truncated {
-        println!(
+        outln!(
             "truncated recording ({why}): showing the {} messages before the cut",
             recording.messages.len()
         );
@@ -36,7 +37,7 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
         }
     };
     let run = &replay.run;
-    println!(
+    outln!(
         "task {} on {} (seed {}), estimator {}; {} messages",
         run.task,
         run.cell,
@@ -48,8 +49,8 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
         .iter()
         .map(|topic| format!("{} {}", topic.name(), recording.count(*topic)))
         .collect();
-    println!("channels: {}", counts.join(", "));
-    println!("timeline:");
+    outln!("channels: {}", counts.join(", "));
+    outln!("timeline:");
     let mut entered_s = 0.0;
     for t in &replay.transitions {
         print_timeline_line(t.t_s, &t.from, &t.to, entered_s);
@@ -57,7 +58,7 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
     }
     for estimator in estimators {
         let refits = replay.refit(*estimator);
-        println!(
+        outln!(
             "{} again on the recorded frames ({} grasps):",
             estimator_name(*estimator),
             refits.len()
@@ -79,7 +80,7 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
             return Status::BadInput;
         }
     };
-    println!("vision again on the recorded images ({}):", images.len());
+    outln!("vision again on the recorded images ({}):", images.len());
     let mut pipeline = args.pipeline(false);
     let mut network = args.network();
     let mut status = Status::Success;
@@ -100,15 +101,18 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
         match pipeline.detect(&image, Some(&mut network)) {
             Ok(output) => {
                 let total_ms: f64 = output.timings_ms.iter().map(|(_, ms)| ms).sum();
-                println!(
+                outln!(
                     "{t_s:9.3} s  {} cable(s), {:?} mask, {total_ms:.1} ms",
                     output.cables.len(),
                     output.mask_used
                 );
                 for (k, cable) in output.cables.iter().enumerate() {
-                    println!(
+                    outln!(
                         "    cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {:.0} px long",
-                        cable.grasp_px[0], cable.grasp_px[1], cable.direction_rad, cable.length_px
+                        cable.grasp_px[0],
+                        cable.grasp_px[1],
+                        cable.direction_rad,
+                        cable.length_px
                     );
                 }
             }
@@ -129,24 +133,26 @@ fn print_refit(refit: &Refit) {
     let line_text =
         |line: &LineInSensor| format!("n {:+7.3} mm  α {:+.4} rad", line.n_mm, line.alpha_rad);
     match &refit.line {
-        Ok(line) => print!("{name:>13}  now      {}", line_text(line)),
-        Err(error) => print!("{name:>13}  now      no estimate: {error}"),
+        Ok(line) => out!("{name:>13}  now      {}", line_text(line)),
+        Err(error) => out!("{name:>13}  now      no estimate: {error}"),
     }
     match refit.error() {
-        Some(e) => println!(
+        Some(e) => outln!(
             "   vs truth n {:+7.3} mm  α {:+.4} rad",
-            e.n_mm, e.alpha_rad
+            e.n_mm,
+            e.alpha_rad
         ),
-        None => println!(),
+        None => outln!(),
     }
     if let Some(recorded) = &refit.recorded {
-        print!("{:>13}  recorded {}", "", line_text(recorded));
+        out!("{:>13}  recorded {}", "", line_text(recorded));
         match refit.recorded_error() {
-            Some(e) => println!(
+            Some(e) => outln!(
                 "   vs truth n {:+7.3} mm  α {:+.4} rad",
-                e.n_mm, e.alpha_rad
+                e.n_mm,
+                e.alpha_rad
             ),
-            None => println!(),
+            None => outln!(),
         }
     }
 }

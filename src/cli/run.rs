@@ -11,6 +11,7 @@ use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::task::{load_task, load_task_on_cell};
 
 use super::Status;
+use super::output::outln;
 
 /// Where a run is recorded: `--record PATH`, else a new file under
 /// `runs/`, or nowhere with `--no-record`.
@@ -99,14 +100,18 @@ pub fn run(
             eprintln!("warning: {error}; the run went on unrecorded");
         }
     } else {
-        println!(
+        outln!(
             "task {} on {} (seed {seed})",
-            task.task.name, cell.cell.name
+            task.task.name,
+            cell.cell.name
         );
         let (target, tolerance) = (task.target, task.tolerance);
-        println!(
+        outln!(
             "target n* = {:+.3} mm, α* = {:+.4} rad; tolerance ±{} mm, ±{} rad",
-            target.n_mm, target.alpha_rad, tolerance.n_mm, tolerance.alpha_rad
+            target.n_mm,
+            target.alpha_rad,
+            tolerance.n_mm,
+            tolerance.alpha_rad
         );
         let mut commentary = Commentary::default();
         loop {
@@ -120,9 +125,9 @@ pub fn run(
     finish_recording(&mut runner);
     let record = runner.into_record();
     if json {
-        match serde_json::to_string_pretty(&RunReport::new(&record)) {
-            Ok(text) => println!("{text}"),
-            Err(error) => eprintln!("error: cannot write the report as JSON: {error}"),
+        let printed = super::json::print(RunReport::new(&record));
+        if printed != Status::Success {
+            return printed;
         }
     } else {
         print_outcome(&record);
@@ -154,7 +159,7 @@ impl Commentary {
     pub(super) fn print_new(&mut self, record: &RunRecord) {
         if let Some(touch_only) = &record.touch_only {
             let printed = self.misses.unwrap_or_else(|| {
-                println!(
+                outln!(
                     "vision not used ({}): searching by touch from the prior",
                     touch_only.why
                 );
@@ -184,7 +189,7 @@ pub(super) fn print_transition(record: &RunRecord, i: usize, t: &TransitionRecor
 
 /// A transition at `t_s` from the state entered at `entered_s`.
 pub(super) fn print_timeline_line(t_s: f64, from: &str, to: &str, entered_s: f64) {
-    println!(
+    outln!(
         "{t_s:9.3} s  {from:>11} → {to:<11}  ({from} took {:.3} s)",
         t_s - entered_s
     );
@@ -200,22 +205,26 @@ pub(super) fn attempt_name(attempt: u32) -> String {
 
 fn print_grasp(name: &str, grasp: &GraspRecord) {
     match (&grasp.fit, &grasp.estimated_error) {
-        (Some(fit), Some(error)) => println!(
+        (Some(fit), Some(error)) => outln!(
             "{name:>13}  estimate n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
             fit.line().n_mm,
             fit.line().alpha_rad,
             error.n_mm,
             error.alpha_rad
         ),
-        _ => println!(
+        _ => outln!(
             "{name:>13}  no estimate (peak Δv {:.3} V)",
             grasp.map.peak_dv_v()
         ),
     }
     if let Some(truth) = &grasp.truth {
-        println!(
+        outln!(
             "{:>13}  true     n {:+7.3} mm  α {:+.4} rad   error n {:+7.3} mm  α {:+.4} rad",
-            "", truth.line.n_mm, truth.line.alpha_rad, truth.error.n_mm, truth.error.alpha_rad
+            "",
+            truth.line.n_mm,
+            truth.line.alpha_rad,
+            truth.error.n_mm,
+            truth.error.alpha_rad
         );
     }
     if let Some(errors) = grasp.shapes.as_ref().and_then(|shapes| shapes.errors) {
@@ -237,7 +246,7 @@ fn print_shape_errors(errors: &ShapeErrors) {
         .iter()
         .filter_map(|&(name, e)| Some(format!("{name} {} | {}", mm(e?.grasped), mm(e?.beyond))))
         .collect();
-    println!(
+    outln!(
         "{:>13}  shape off the true cable, on the pad | {:.0} mm beyond: {} mm",
         "",
         errors.beyond_mm,
@@ -248,28 +257,30 @@ fn print_shape_errors(errors: &ShapeErrors) {
 pub(super) fn print_outcome(record: &RunRecord) {
     let tolerance = &record.tolerance;
     if let Some(touch_only) = &record.touch_only {
-        println!(
+        outln!(
             "touch only ({}): {} search move(s)",
-            touch_only.why, touch_only.search_moves
+            touch_only.why,
+            touch_only.search_moves
         );
     }
     match &record.outcome {
-        Some(RunOutcome::Success { regrasps }) => println!(
+        Some(RunOutcome::Success { regrasps }) => outln!(
             "success: within tolerance (|n| ≤ {} mm, |α| ≤ {} rad) after {regrasps} regrasp(s)",
-            tolerance.n_mm, tolerance.alpha_rad
+            tolerance.n_mm,
+            tolerance.alpha_rad
         ),
-        Some(RunOutcome::Failed { reason }) => println!("task failed: {reason}"),
+        Some(RunOutcome::Failed { reason }) => outln!("task failed: {reason}"),
         Some(RunOutcome::Fault {
             state,
             device,
             error,
         }) => {
             let device = device.map(|d| format!(" ({d})")).unwrap_or_default();
-            println!("device fault in {state}{device}: {error}; the cell was made safe");
+            outln!("device fault in {state}{device}: {error}; the cell was made safe");
             for problem in &record.safe_stop_problems {
-                println!("  could not make safe: {problem}");
+                outln!("  could not make safe: {problem}");
             }
         }
-        None => println!("the run stopped before it ended"),
+        None => outln!("the run stopped before it ended"),
     }
 }

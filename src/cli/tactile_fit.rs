@@ -27,16 +27,7 @@ pub fn tactile_fit(file: Option<&Path>, pitch_mm: f64, contact_threshold_v: f64)
         contact_threshold_v,
     };
     match fit_wire(&map, &config) {
-        Ok(fit) => match serde_json::to_string_pretty(&fit) {
-            Ok(json) => {
-                println!("{json}");
-                Status::Success
-            }
-            Err(error) => {
-                eprintln!("error: cannot write the fit as JSON: {error}");
-                Status::TaskFailed
-            }
-        },
+        Ok(fit) => super::json::print(&fit),
         Err(error @ FitError::InvalidConfig { .. }) => {
             eprintln!("error: {error}");
             Status::BadInput

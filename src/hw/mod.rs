@@ -11,13 +11,14 @@ pub mod tactile;
 
 use std::sync::Arc;
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use crate::perception::vision::VisionError;
 use camera::ImageError;
 
 /// Which device of the cell, as named in errors and records.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DeviceKind {
     Arm,

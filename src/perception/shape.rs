@@ -5,6 +5,7 @@
 //! and beyond it.
 
 use nalgebra::{DMatrix, DVector, Isometry3, Point2, Point3, Vector2};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::tactile::{Centroid, Direction, Quadratic};
@@ -20,8 +21,9 @@ pub const SHAPE_SPACING_MM: f64 = 1.0;
 pub const BEYOND_PAD_MM: f64 = 30.0;
 
 /// One point of a cable's centre line.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ShapePoint {
+    #[schemars(with = "[f64; 3]")]
     pub in_base_mm: Point3<f64>,
     /// Standard deviation of the point across the cable.
     pub sigma_mm: f64,
@@ -206,7 +208,7 @@ pub fn resample(points: &[Point3<f64>], spacing_mm: f64) -> Vec<Point3<f64>> {
 }
 
 /// Mean and largest distance from the true cable's points to a shape.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Distances {
     pub mean_mm: f64,
     pub max_mm: f64,
@@ -215,7 +217,7 @@ pub struct Distances {
 /// A shape's distance to the true cable over the stretch the pad holds
 /// and over [`BEYOND_PAD_MM`] beyond each end of it; `None` where the true
 /// cable has no point.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct StretchErrors {
     pub grasped: Option<Distances>,
     pub beyond: Option<Distances>,

@@ -7,12 +7,13 @@
 use nalgebra::Point3;
 use plotters::coord::Shift;
 use plotters::prelude::{
-    ChartBuilder, DrawingArea, DrawingBackend, IntoFont, LineSeries, PathElement, Rectangle,
-    SeriesLabelPosition,
+    DrawingArea, DrawingBackend, IntoFont, LineSeries, PathElement, Rectangle, SeriesLabelPosition,
 };
 use plotters::style::{Color, RGBColor, ShapeStyle};
 
-use super::{FONT, Figure, LABEL_SIZE, PlotError, TICK_SIZE, TITLE_SIZE, colour, drawing_error};
+use super::{
+    Axes, FONT, Figure, LABEL_SIZE, PlotError, TITLE_SIZE, chart, colour, drawing_error, whole,
+};
 use crate::perception::shape::{BEYOND_PAD_MM, ShapePoint, StretchErrors};
 use crate::record::{GraspShapes, TactileShape};
 
@@ -164,24 +165,22 @@ impl Figure for FusionFigure {
         // As few decimals as the range allows.
         let decimals = if y_high - y_low > 10.0 { 0 } else { 1 };
 
-        let mut chart = ChartBuilder::on(area)
-            .caption(&self.title, (FONT, TITLE_SIZE).into_font())
-            .margin(16)
-            .x_label_area_size(48)
-            .y_label_area_size(64)
-            .build_cartesian_2d(-reach_mm..reach_mm, y_low..y_high)
+        let below = area
+            .titled(&self.title, (FONT, TITLE_SIZE).into_font())
             .map_err(drawing_error)?;
-        chart
-            .configure_mesh()
-            .x_desc("along the pad's x, from its centre (mm)")
-            .y_desc("across, in the pad's plane (mm)")
-            .x_label_formatter(&|x| format!("{x:.0}"))
-            .y_label_formatter(&|y| format!("{y:.decimals$}"))
-            .axis_desc_style((FONT, LABEL_SIZE))
-            .label_style((FONT, TICK_SIZE))
-            .light_line_style(colour::REGION.mix(0.6))
-            .draw()
-            .map_err(drawing_error)?;
+        let y_label = |y: &f64| format!("{y:.decimals$}");
+        let mut chart = chart(
+            &below,
+            &Axes {
+                x: -reach_mm..reach_mm,
+                y: y_low..y_high,
+                x_desc: "along the pad's x, from its centre (mm)",
+                y_desc: "across, in the pad's plane (mm)",
+                x_label: &whole,
+                y_label: &y_label,
+                x_ticks: 10,
+            },
+        )?;
         chart
             .draw_series([Rectangle::new(
                 [(-half_mm, y_low), (half_mm, y_high)],

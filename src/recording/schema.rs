@@ -257,7 +257,7 @@ macro_rules! schema {
 
 const RUN_SCHEMA: &str = schema!(
     "cablecell.Run",
-    r#""task":{"type":"string"},"cell":{"type":"string"},"seed":{"type":"integer"},"target":{"type":"object","properties":{"alpha_rad":{"type":"number"},"offset_mm":{"type":"number"}}},"tolerance":{"type":"object","properties":{"n_mm":{"type":"number"},"alpha_rad":{"type":"number"}}},"estimator":{"type":"string"},"pitch_mm":{"type":"number"},"contact_threshold_v":{"type":"number"},"bias_frames":{"type":"integer"}"#
+    r#""task":{"type":"string"},"cell":{"type":"string"},"seed":{"type":"integer"},"target":{"type":"object","properties":{"alpha_rad":{"type":"number"},"n_mm":{"type":"number"}}},"tolerance":{"type":"object","properties":{"n_mm":{"type":"number"},"alpha_rad":{"type":"number"}}},"estimator":{"type":"string"},"pitch_mm":{"type":"number"},"contact_threshold_v":{"type":"number"},"bias_frames":{"type":"integer"}"#
 );
 const TRANSITION_SCHEMA: &str = schema!(
     "cablecell.Transition",
@@ -304,7 +304,7 @@ macro_rules! stretch_schema {
 const CABLE_SHAPES_SCHEMA: &str = schema!(
     "cablecell.CableShapes",
     concat!(
-        r#""attempt":{"type":"integer"},"base_from_sensor":{"type":"object","properties":{"rotation":{"type":"array","items":{"type":"number"}},"translation":{"type":"array","items":{"type":"number"}}}},"pad_half_side_mm":{"type":"number"},"vision":"#,
+        r#""attempt":{"type":"integer"},"base_from_sensor":{"type":"object","properties":{"translation_mm":{"type":"array","items":{"type":"number"},"minItems":3,"maxItems":3},"rotation_xyzw":{"type":"array","items":{"type":"number"},"minItems":4,"maxItems":4}}},"pad_half_side_mm":{"type":"number"},"vision":"#,
         shape_schema!(),
         r#","tactile_linear":"#,
         shape_schema!(),
@@ -314,7 +314,7 @@ const CABLE_SHAPES_SCHEMA: &str = schema!(
         shape_schema!(),
         r#","fused_from":{"type":["string","null"],"enum":["linear","quadratic","ridge",null]},"fused":"#,
         shape_schema!(),
-        r#","truth":{"type":["array","null"],"items":{"type":"array","items":{"type":"number"},"minItems":3,"maxItems":3}},"errors":{"type":["object","null"],"properties":{"beyond_mm":{"type":"number"},"vision":"#,
+        r#","truth_in_base_mm":{"type":["array","null"],"items":{"type":"array","items":{"type":"number"},"minItems":3,"maxItems":3}},"errors":{"type":["object","null"],"properties":{"beyond_mm":{"type":"number"},"vision":"#,
         stretch_schema!(),
         r#","tactile_linear":"#,
         stretch_schema!(),

@@ -56,6 +56,20 @@ pub fn json_of(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).expect("JSON")
 }
 
+/// Checks `value` against the JSON Schema shipped for `output` in
+/// docs/schemas/ (which a test keeps equal to `cablecell json-schema`'s).
+pub fn assert_follows_schema(output: &str, value: &serde_json::Value) {
+    let path = root().join(format!("docs/schemas/{output}.schema.json"));
+    let schema: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("the schema")).expect("JSON");
+    let validator = jsonschema::validator_for(&schema).expect("a valid JSON Schema");
+    let errors: Vec<String> = validator
+        .iter_errors(value)
+        .map(|error| format!("{} at {}", error, error.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{output}: {errors:#?}");
+}
+
 /// A path as the `&str` a command line takes.
 pub fn text(path: &Path) -> &str {
     path.to_str().expect("utf-8 path")

@@ -3,7 +3,7 @@
 mod load;
 mod print;
 mod score;
-mod sweep;
+pub mod sweep;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -12,17 +12,20 @@ use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::eval::{GroundTruth, ImageScore};
 use clap::Args;
 use opencv::core::Mat;
+use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::Status;
 use super::vision_io::{MaskArg, VisionArgs};
+use super::{Status, progress};
 use load::load_samples;
-use print::{print_evaluation, print_json};
+use print::print_evaluation;
 use score::{Failure, evaluate, labels_own_dice};
 use sweep::sweep;
 
 #[derive(Args, Debug, Clone)]
 pub struct EvalVisionArgs {
+    /// The labelled folder: each image with its masks and centre lines (a
+    /// folder `render-dataset` wrote, or the development photographs).
     pub dir: PathBuf,
     #[command(flatten)]
     pub vision: VisionArgs,
@@ -50,11 +53,13 @@ pub struct EvalVisionArgs {
     /// not labelled.
     #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
     pub overlay: Option<PathBuf>,
+    /// Print the scores as JSON (`cablecell json-schema eval-vision`, or
+    /// `eval-vision-sweep` with --sweep).
     #[arg(long)]
     pub json: bool,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct Evaluation {
     images: usize,
     union_iou: Option<Summary>,
@@ -89,7 +94,7 @@ struct Evaluation {
 }
 
 /// Images by the mask that ran on them.
-#[derive(Serialize, Default)]
+#[derive(Serialize, Default, JsonSchema)]
 struct MaskUse {
     classical: usize,
     network: usize,
@@ -97,14 +102,15 @@ struct MaskUse {
 
 /// The labels' own union DICE: their centre lines drawn `width_px` wide
 /// against their masks, a reference for the pipeline's union DICE.
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct LabelsOwnDice {
     width_px: f64,
     union_dice: Summary,
 }
 
-#[derive(Serialize)]
-struct Report {
+/// What `eval-vision --json` prints.
+#[derive(Serialize, JsonSchema)]
+pub struct Report {
     #[serde(flatten)]
     evaluation: Evaluation,
     labels_own_union_dice: Option<LabelsOwnDice>,
@@ -112,7 +118,7 @@ struct Report {
 
 /// How much of one side's centre-line length lies within
 /// [`CENTRELINE_NEAR_PX`] of the other side's.
-#[derive(Serialize)]
+#[derive(Serialize, JsonSchema)]
 struct LengthShare {
     share: f64,
     length_px: f64,
@@ -152,7 +158,10 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     if args.sweep {
         return sweep(args, &samples);
     }
-    let report = evaluate(&args.vision, &samples, args.overlay.as_deref()).and_then(|evaluation| {
+    let bar = progress::bar(samples.len(), "images");
+    let evaluated = evaluate(&args.vision, &samples, args.overlay.as_deref(), &bar);
+    bar.finish_and_clear();
+    let report = evaluated.and_then(|evaluation| {
         Ok(Report {
             evaluation,
             labels_own_union_dice: labels_own_dice(&samples)?,
@@ -166,7 +175,7 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
         }
     };
     if args.json {
-        print_json(&report)
+        crate::cli::json::print(&report)
     } else {
         print_evaluation(&args.dir, &report);
         Status::Success

@@ -1,31 +1,16 @@
 //! What `eval-vision` prints: the scores, the length shares, the offsets
 //! and the cables left unmatched, or the JSON report.
 
+use crate::cli::output::outln;
 use std::path::Path;
 
 use cablecell::campaign::stats::Summary;
 use cablecell::perception::vision::eval::{
     CENTRELINE_NEAR_PX, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
 };
-use serde::Serialize;
-
-use crate::cli::Status;
 
 use super::score::{found_length_labelled, labelled_length_found};
 use super::{LengthShare, Report};
-
-pub(super) fn print_json(value: &impl Serialize) -> Status {
-    match serde_json::to_string_pretty(value) {
-        Ok(text) => {
-            println!("{text}");
-            Status::Success
-        }
-        Err(error) => {
-            eprintln!("error: cannot write the evaluation as JSON: {error}");
-            Status::OutputFailed
-        }
-    }
-}
 
 /// Images whose share is lower than this are named, lowest first.
 const LOW_LENGTH_SHARE: f64 = 0.9;
@@ -65,7 +50,7 @@ fn print_length_share(
             low.join(", ")
         )
     };
-    println!(
+    outln!(
         "  {name:<22} {:.1} % of {:.0} px {what} (within {CENTRELINE_NEAR_PX} px){lowest}",
         100.0 * share.share,
         share.length_px
@@ -82,17 +67,17 @@ fn summary(s: &Summary) -> String {
 
 pub(super) fn print_evaluation(dir: &Path, report: &Report) {
     let e = &report.evaluation;
-    println!("{}: {} images", dir.display(), e.images);
+    outln!("{}: {} images", dir.display(), e.images);
     let line = |name: &str, s: &Option<Summary>| {
         if let Some(s) = s {
-            println!("  {name:<22} {}", summary(s));
+            outln!("  {name:<22} {}", summary(s));
         }
     };
     line("union IoU", &e.union_iou);
     line("union DICE", &e.union_dice);
     print_offsets(&e.union_dice_at_offset, &e.per_image);
     if let Some(labels) = &report.labels_own_union_dice {
-        println!(
+        outln!(
             "  {:<22} {}  (the labelled centre lines, smoothed as the masks were drawn, {:.1} px wide against the labelled masks)",
             "labels' own union DICE",
             summary(&labels.union_dice),
@@ -101,7 +86,7 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
     }
     line("instance DICE", &e.instance_dice);
     if let Some(rate) = &e.count_right {
-        println!(
+        outln!(
             "  {:<22} {}/{} = {:.0} % [{:.0}, {:.0}] (95 % CI)",
             "instance count right",
             rate.successes,
@@ -123,7 +108,7 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
         })
         .collect();
     if !miscounted.is_empty() {
-        println!("  {:<22} {}", "count wrong in", miscounted.join(", "));
+        outln!("  {:<22} {}", "count wrong in", miscounted.join(", "));
     }
     print_unmatched(
         "labelled, not found",
@@ -153,12 +138,14 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
     );
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);
-    println!(
+    outln!(
         "  {:<22} classical in {}, network in {} of the images",
-        "mask used", e.mask_used.classical, e.mask_used.network
+        "mask used",
+        e.mask_used.classical,
+        e.mask_used.network
     );
     for (stage, s) in &e.stage_ms {
-        println!(
+        outln!(
             "  {:<22} median {:.2} ms  p95 {:.2} ms",
             format!("{stage} time"),
             s.median,
@@ -166,7 +153,7 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
         );
     }
     for (stem, note) in &e.notes {
-        println!("  note: {stem}: {note}");
+        outln!("  note: {stem}: {note}");
     }
 }
 
@@ -197,7 +184,7 @@ fn print_offsets(dice: &Option<Summary>, per_image: &[(String, ImageScore)]) {
     } else {
         format!("; {LARGE_OFFSET_PX} px or more in {}", large.join(", "))
     };
-    println!(
+    outln!(
         "  {:<22} {}  (each image's found mask moved by the whole pixels, up to {MASK_OFFSET_SEARCH_PX}, that match its labels best; median move (dx, dy) ({}, {}) px{large})",
         "union DICE, moved",
         summary(dice),
@@ -231,6 +218,6 @@ fn print_unmatched<'a>(
         } else {
             format!(": {}", listed.join(", "))
         };
-        println!("  {what:<22} {of}{list}");
+        outln!("  {what:<22} {of}{list}");
     }
 }

@@ -15,6 +15,7 @@ use crate::cli::Status;
 use crate::cli::vision_io::{VisionArgs, create_dir, draw_line, draw_overlay, write_png};
 
 use super::{Evaluation, LabelsOwnDice, LengthShare, MaskUse, Sample};
+use indicatif::ProgressBar;
 
 pub(super) fn labels_own_dice(samples: &[Sample]) -> Result<Option<LabelsOwnDice>, String> {
     let truths: Vec<&GroundTruth> = samples.iter().map(|s| &s.truth).collect();
@@ -49,11 +50,12 @@ impl From<String> for Failure {
 /// Runs the pipeline configured by `vision` on every sample and scores it,
 /// drawing each result into `overlay` when given. The first image is run
 /// once untimed before the loop, so that loading the network and first-use
-/// allocations are not counted as its time.
+/// allocations are not counted as its time. `bar` ticks once an image.
 pub(super) fn evaluate(
     vision: &VisionArgs,
     samples: &[Sample],
     overlay: Option<&Path>,
+    bar: &ProgressBar,
 ) -> Result<Evaluation, Failure> {
     let failed = |sample: &Sample, error: &VisionError| Failure {
         message: format!("{}: {error}", sample.path.display()),
@@ -73,6 +75,7 @@ pub(super) fn evaluate(
     let mut mask_used = MaskUse::default();
     let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     for (k, sample) in samples.iter().enumerate() {
+        bar.inc(1);
         if k == 0 {
             pipeline
                 .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))

@@ -1,22 +1,31 @@
 //! The sweep: the main settings one after another, in rounds, as a table of
 //! run time against error.
 
+use crate::cli::output::outln;
 use std::path::PathBuf;
 
 use cablecell::campaign::stats::Summary;
 use cablecell::perception::vision::network::FLOAT_MODEL;
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use crate::cli::Status;
 use crate::cli::vision_io::{InstancesArg, MaskArg, VisionArgs};
 
-use super::print::print_json;
 use super::score::{Failure, evaluate, labels_own_dice};
 use super::{EvalVisionArgs, Evaluation, Sample};
+use crate::cli::progress;
+
+/// What `eval-vision --sweep --json` prints.
+#[derive(Serialize, JsonSchema)]
+pub struct Sweep {
+    /// The command line's settings first, then one row per change.
+    rows: Vec<SweepRow>,
+}
 
 /// One row of the sweep: what it changes and what it scored (`None`:
 /// not measured for this row).
-#[derive(Serialize, Default)]
+#[derive(Serialize, Default, JsonSchema)]
 struct SweepRow {
     setting: String,
     total_ms_median: Option<f64>,
@@ -91,11 +100,15 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     // The first round's evaluations (the pipeline is deterministic, so
     // later rounds score alike), gathering every round's end-to-end times.
     let mut evaluations: Vec<Evaluation> = Vec::with_capacity(settings.len());
+    let runs = args.rounds as usize * settings.len() * samples.len();
+    let bar = progress::bar(runs, "images (all settings, all rounds)");
     for round in 0..args.rounds {
         for (k, (setting, vision)) in settings.iter().enumerate() {
-            let evaluation = match evaluate(vision, samples, None) {
+            bar.set_message(setting.clone());
+            let evaluation = match evaluate(vision, samples, None, &bar) {
                 Ok(evaluation) => evaluation,
                 Err(Failure { message, status }) => {
+                    bar.finish_and_clear();
                     eprintln!("error: {setting}: {message}");
                     return status;
                 }
@@ -107,6 +120,7 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             }
         }
     }
+    bar.finish_and_clear();
     let mut rows = Vec::new();
     for ((setting, _), evaluation) in settings.into_iter().zip(evaluations) {
         let total = Summary::of(&evaluation.total_ms);
@@ -142,23 +156,23 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
         }
     }
     if args.json {
-        return print_json(&rows);
+        return crate::cli::json::print(Sweep { rows });
     }
-    println!(
+    outln!(
         "{}: {} images, timed in {} round(s)",
         args.dir.display(),
         samples.len(),
         args.rounds
     );
-    println!(
+    outln!(
         "| setting | median ms | p95 ms | union DICE | count right | labels found | found labelled | length found | found length labelled | grasp px mean | grasp px median | centre line px |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    outln!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let cell =
         |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
     let percent = |v: Option<f64>| v.map_or("–".to_owned(), |r| format!("{:.0} %", 100.0 * r));
     for row in &rows {
-        println!(
+        outln!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             row.setting,
             cell(row.total_ms_median, 1),

@@ -1,6 +1,7 @@
 //! The REPL's commands: one table, from which the line is dispatched,
 //! `help` is printed and the arguments are completed.
 
+use crate::cli::output::outln;
 use std::path::Path;
 use std::sync::atomic::Ordering;
 
@@ -135,8 +136,8 @@ pub(super) const COMMANDS: [Spec; 16] = [
     Spec {
         name: "show",
         aliases: &[],
-        args: "tactile|pose|params",
-        help: "the last tactile map, the arm's pose, the task's parameters",
+        args: "tactile [FILE]|pose|params",
+        help: "the last tactile map (with FILE.png|.svg also drawn there, Fig. 7), the arm's pose, the task's parameters",
         completes: Completes::Topic,
         run: show,
     },
@@ -192,20 +193,66 @@ pub(super) fn find(name: &str) -> Option<&'static Spec> {
         .find(|spec| spec.name == name || spec.aliases.contains(&name))
 }
 
-/// What `show` shows of a topic.
-type Show = fn(&mut Loaded) -> Result<(), String>;
+/// What `show` shows of a topic, given the words after the topic.
+type Show = fn(&mut Loaded, &[&str]) -> Result<(), String>;
+
+/// A `show` topic: its name, its arguments as `help` shows them (empty if
+/// it takes none), what it shows.
+pub(super) struct ShowTopic {
+    pub(super) name: &'static str,
+    args: &'static str,
+    show: Show,
+}
 
 /// The topics of `show`, in the order `help` lists them.
-pub(super) const SHOW_TOPICS: [(&str, Show); 3] = [
-    ("tactile", |loaded| show_tactile(loaded)),
-    ("pose", show_pose),
-    ("params", |loaded| {
-        for (name, value) in loaded.params.list() {
-            println!("{name} = {value}");
-        }
-        Ok(())
-    }),
+pub(super) const SHOW_TOPICS: [ShowTopic; 3] = [
+    ShowTopic {
+        name: "tactile",
+        args: "[FILE]",
+        show: |loaded, args| match args {
+            [] => show_tactile(loaded, None),
+            [file] => show_tactile(loaded, Some(Path::new(file))),
+            _ => Err("usage: show tactile [FILE.png|FILE.svg]".into()),
+        },
+    },
+    ShowTopic {
+        name: "pose",
+        args: "",
+        show: |loaded, _| show_pose(loaded),
+    },
+    ShowTopic {
+        name: "params",
+        args: "",
+        show: |loaded, _| {
+            for (name, value) in loaded.params.list() {
+                outln!("{name} = {value}");
+            }
+            Ok(())
+        },
+    },
 ];
+
+impl ShowTopic {
+    /// Whether its argument is a file name, for completion.
+    pub(super) fn takes_file(&self) -> bool {
+        self.args == "[FILE]"
+    }
+}
+
+/// "tactile [FILE]|pose|params": the topics with their arguments.
+fn show_usage() -> String {
+    let topics: Vec<String> = SHOW_TOPICS
+        .iter()
+        .map(|t| {
+            if t.args.is_empty() {
+                t.name.to_owned()
+            } else {
+                format!("{} {}", t.name, t.args)
+            }
+        })
+        .collect();
+    topics.join("|")
+}
 
 /// Runs one line: its first word names the command, the rest are its
 /// arguments.
@@ -242,7 +289,7 @@ fn advance(session: &mut Session, mode: Mode) -> Result<Flow, String> {
     let record = runner.record();
     match stop {
         Stop::Transition { to, .. } if !run_over(runner) => {
-            println!("in {to}{}", next_command(runner));
+            outln!("in {to}{}", next_command(runner));
         }
         Stop::Transition { .. } | Stop::Finished { .. } => {}
         Stop::Breakpoint { id, state } => {
@@ -251,15 +298,15 @@ fn advance(session: &mut Session, mode: Mode) -> Result<Flow, String> {
                 .and_then(|b| b.condition.as_ref())
                 .map(|c| format!(" (if {})", c.text()))
                 .unwrap_or_default();
-            println!(
+            outln!(
                 "breakpoint {id} hit on entering {state}{condition}{}",
                 next_command(runner)
             );
         }
-        Stop::Paused { state } => println!("paused in {state}{}", next_command(runner)),
+        Stop::Paused { state } => outln!("paused in {state}{}", next_command(runner)),
     }
     if run_over(runner) {
-        println!("run over in {}", runner.state().name());
+        outln!("run over in {}", runner.state().name());
         print_outcome(record);
     }
     Ok(Flow::Go)
@@ -279,7 +326,7 @@ fn reset(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
     };
     session.start(params, seed)?;
     let state = session.loaded()?.driver.runner().state().name();
-    println!("reset: {state} (seed {seed})");
+    outln!("reset: {state} (seed {seed})");
     Ok(Flow::Go)
 }
 
@@ -296,7 +343,7 @@ fn abort(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
         .abort(|runner| commentary.print_new(runner.record()))
         .map_err(|nothing| nothing.to_string())?;
     if let Some(error) = recording_error {
-        println!("warning: {error}; the run goes on unrecorded");
+        outln!("warning: {error}; the run goes on unrecorded");
     }
     print_outcome(loaded.driver.runner().record());
     Ok(Flow::Go)
@@ -317,8 +364,8 @@ fn add_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
         .add(state, condition.as_deref())
         .map_err(|e| e.to_string())?;
     match condition {
-        Some(condition) => println!("breakpoint {id}: {state} if {condition}"),
-        None => println!("breakpoint {id}: {state}"),
+        Some(condition) => outln!("breakpoint {id}: {state} if {condition}"),
+        None => outln!("breakpoint {id}: {state}"),
     }
     Ok(Flow::Go)
 }
@@ -326,10 +373,10 @@ fn add_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
 fn list_breaks(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
     let breakpoints = session.loaded()?.driver.breakpoints();
     if breakpoints.iter().next().is_none() {
-        println!("no breakpoints");
+        outln!("no breakpoints");
     }
     for breakpoint in breakpoints.iter() {
-        println!("{breakpoint}");
+        outln!("{breakpoint}");
     }
     Ok(Flow::Go)
 }
@@ -344,7 +391,7 @@ fn delete_break(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     if !session.loaded()?.driver.breakpoints_mut().delete(id) {
         return Err(format!("there is no breakpoint {id} (`breaks` lists them)"));
     }
-    println!("deleted breakpoint {id}");
+    outln!("deleted breakpoint {id}");
     Ok(Flow::Go)
 }
 
@@ -355,14 +402,17 @@ fn state(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
 
 fn show(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     let topic = match args {
-        [topic] => SHOW_TOPICS.iter().find(|(name, _)| name == topic),
-        _ => None,
+        [name, rest @ ..] => SHOW_TOPICS
+            .iter()
+            .find(|t| t.name == *name)
+            .filter(|t| !t.args.is_empty() || rest.is_empty())
+            .map(|t| (t, rest)),
+        [] => None,
     };
-    let Some((_, show)) = topic else {
-        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
-        return Err(format!("usage: show {}", topics.join("|")));
+    let Some((topic, rest)) = topic else {
+        return Err(format!("usage: show {}", show_usage()));
     };
-    show(session.loaded()?)?;
+    (topic.show)(session.loaded()?, rest)?;
     Ok(Flow::Go)
 }
 
@@ -383,9 +433,9 @@ fn set(session: &mut Session, args: &[&str]) -> Result<Flow, String> {
     let recorded = loaded
         .driver
         .set_plan(Plan::new(loaded.params.task(), &cell));
-    println!("{param} = {value} (from the next command on)");
+    outln!("{param} = {value} (from the next command on)");
     if let Err(error) = recorded {
-        println!("warning: {error}; the run goes on unrecorded");
+        outln!("warning: {error}; the run goes on unrecorded");
     }
     Ok(Flow::Go)
 }
@@ -398,30 +448,30 @@ fn values(session: &mut Session, _: &[&str]) -> Result<Flow, String> {
         let value = values
             .get(name)
             .map_or("(none yet)".to_owned(), |v| format!("{v:.4}"));
-        println!("{name:>22} = {value:<12} {}", RunValues::describe(name));
+        outln!("{name:>22} = {value:<12} {}", RunValues::describe(name));
     }
     Ok(Flow::Go)
 }
 
 fn print_help() {
-    println!("commands:");
+    outln!("commands:");
     for spec in &COMMANDS {
-        println!(
+        outln!(
             "  {:<28} {}",
             format!("{} {}", spec.name, spec.args),
             spec.help
         );
     }
     let short: Vec<_> = COMMANDS.iter().filter(|s| !s.aliases.is_empty()).collect();
-    println!(
+    outln!(
         "({} also as {})",
         and_list(short.iter().map(|spec| spec.name)),
         and_list(short.iter().flat_map(|spec| spec.aliases.iter().copied()))
     );
-    println!("states: {}", State::NAMES.join(", "));
-    println!("values for `break STATE if EXPR` (`values` shows them now):");
-    println!("  {}", RunValues::NAMES.join(", "));
-    println!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
+    outln!("states: {}", State::NAMES.join(", "));
+    outln!("values for `break STATE if EXPR` (`values` shows them now):");
+    outln!("  {}", RunValues::NAMES.join(", "));
+    outln!("  with numbers, + - * /, abs(...), < <= > >= == !=, and, or, not");
 }
 
 /// `a, b and c`.
@@ -449,11 +499,7 @@ mod tests {
         }
         assert!(find("frobnicate").is_none());
         // `help` shows the topics `show` takes.
-        let topics: Vec<_> = SHOW_TOPICS.iter().map(|(name, _)| *name).collect();
-        assert_eq!(
-            find("show").map(|s| s.args),
-            Some(topics.join("|").as_str())
-        );
+        assert_eq!(find("show").map(|s| s.args), Some(show_usage().as_str()));
         assert_eq!(and_list(["s", "c", "b"].into_iter()), "s, c and b");
     }
 }

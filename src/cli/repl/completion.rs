@@ -1,6 +1,6 @@
 //! Completion on the terminal: of commands, and of each command's
 //! arguments as the command table says (states, parameters, `show` topics,
-//! value names in conditions, file names).
+//! value names in conditions, file names (for `load` and `show tactile`)).
 
 use cablecell::orchestrator::State;
 use cablecell::orchestrator::breakpoint::RunValues;
@@ -60,10 +60,17 @@ impl Completer for ReplHelper {
                     .map(|s| (*s).to_owned())
                     .chain(["abs(", "and", "or", "not"].map(str::to_owned))
                     .collect(),
-                (Some(Completes::Topic), []) => SHOW_TOPICS
-                    .iter()
-                    .map(|(name, _)| (*name).to_owned())
-                    .collect(),
+                (Some(Completes::Topic), []) => {
+                    SHOW_TOPICS.iter().map(|t| t.name.to_owned()).collect()
+                }
+                // A topic that takes a file: `show tactile FILE`.
+                (Some(Completes::Topic), [topic])
+                    if SHOW_TOPICS
+                        .iter()
+                        .any(|t| t.name == *topic && t.takes_file()) =>
+                {
+                    return self.files.complete(line, pos, ctx);
+                }
                 (Some(Completes::Param), []) => self.params.clone(),
                 (Some(Completes::Command), []) => names(),
                 _ => Vec::new(),

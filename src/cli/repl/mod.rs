@@ -10,6 +10,7 @@ mod map;
 mod session;
 mod show;
 
+use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -74,7 +75,7 @@ pub fn repl(
     let history = history_path();
     // A missing history file is the first session's normal case.
     let _ = editor.load_history(&history);
-    println!(
+    outln!(
         "cablecell repl on {} ({}): `help` lists the commands",
         session.cell.cell.name,
         session.cell_path.display()
@@ -91,14 +92,14 @@ pub fn repl(
         let line = match editor.readline(&prompt) {
             Ok(line) => line,
             Err(ReadlineError::Interrupted) => {
-                println!("(nothing is running; `quit` leaves)");
+                outln!("(nothing is running; `quit` leaves)");
                 continue;
             }
             Err(ReadlineError::Eof) => break,
             // A byte that is no UTF-8 (a stray key, a paste in another
             // encoding) loses that line only.
             Err(ReadlineError::Io(error)) if error.kind() == std::io::ErrorKind::InvalidData => {
-                println!("cannot: the line is not valid UTF-8; type it again");
+                outln!("cannot: the line is not valid UTF-8; type it again");
                 continue;
             }
             Err(error) => {
@@ -117,7 +118,7 @@ pub fn repl(
         match run_line(&mut session, line) {
             Ok(Flow::Go) => {}
             Ok(Flow::Quit) => break,
-            Err(message) => println!("cannot: {message}"),
+            Err(message) => outln!("cannot: {message}"),
         }
         if let Some(helper) = editor.helper_mut() {
             *helper = ReplHelper::new(&session);

@@ -1,5 +1,6 @@
 //! A REPL session: the cell, the loaded task and its run.
 
+use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -42,7 +43,7 @@ impl Session {
             .seed
             .or(params.task().task.seed)
             .unwrap_or_else(rand::random);
-        println!(
+        outln!(
             "loaded task {} from {} (seed {seed})",
             params.task().task.name,
             path.display()

@@ -1,8 +1,13 @@
 //! What the REPL shows of a run: its state and the next command, the arm's
 //! pose, the latest tactile map with its fit.
 
+use crate::cli::output::outln;
+use std::path::Path;
+
 use cablecell::orchestrator::{Command, Runner};
 use cablecell::perception::tactile::{Estimate, TAXEL_COLS, TAXEL_ROWS};
+use cablecell::plot::save;
+use cablecell::plot::tactile::TactileFigure;
 use cablecell::record::{GraspRecord, RunRecord};
 
 use super::super::run::{attempt_name, print_outcome, print_transition};
@@ -37,7 +42,7 @@ fn command_name(command: &Command) -> &'static str {
 pub(super) fn show_state(loaded: &Loaded) {
     let runner = loaded.driver.runner();
     let record = runner.record();
-    println!(
+    outln!(
         "state {} at {:.3} s{}",
         runner.state().name(),
         runner.now_s(),
@@ -45,13 +50,13 @@ pub(super) fn show_state(loaded: &Loaded) {
     );
     let first = record.transitions.len().saturating_sub(8);
     if first > 0 {
-        println!("  ({first} earlier transitions)");
+        outln!("  ({first} earlier transitions)");
     }
     for (i, t) in record.transitions.iter().enumerate().skip(first) {
         print_transition(record, i, t);
     }
     if let Some(entered) = record.transitions.last() {
-        println!(
+        outln!(
             "  in {} for {:.3} s",
             entered.to,
             runner.now_s() - entered.t_s
@@ -67,9 +72,9 @@ pub(super) fn show_pose(loaded: &mut Loaded) -> Result<(), String> {
         .driver
         .base_from_tcp()
         .map_err(|e| format!("the arm did not answer: {e}"))?;
-    println!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
+    outln!("arm TCP in base now:      {}", pose_text(&base_from_tcp));
     if let Some((name, grasp)) = latest_grasp(loaded.driver.runner().record()) {
-        println!(
+        outln!(
             "at the latest grasp ({name}): {}",
             pose_text(&grasp.base_from_tcp)
         );
@@ -103,30 +108,33 @@ fn latest_grasp(record: &RunRecord) -> Option<(String, &GraspRecord)> {
     Some((name, grasp))
 }
 
-pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
+/// The latest tactile map with its fit, as text; with `file`, also drawn
+/// there as the paper's Fig. 7 (`cablecell plot tactile`'s figure).
+pub(super) fn show_tactile(loaded: &Loaded, file: Option<&Path>) -> Result<(), String> {
     let record = loaded.driver.runner().record();
     let (name, grasp) = latest_grasp(record)
         .ok_or("no tactile map yet: the first one is read after the trial grasp")?;
-    let pitch_mm = loaded.driver.runner().plan().fit.pitch_mm;
+    let fit_config = loaded.driver.runner().plan().fit;
+    let pitch_mm = fit_config.pitch_mm;
     let line = grasp.fit.as_ref().map(Estimate::line);
     let centroids: Vec<(f64, f64)> = match &grasp.fit {
         Some(Estimate::Centroids(fit)) => fit.centroids.iter().map(|c| (c.x_mm, c.y_mm)).collect(),
         _ => Vec::new(),
     };
-    println!(
+    outln!(
         "{name} at {:.3} s: mean Δv, peak {:.3} V (shading ∝ Δv; o centroid, * fitted line)",
         grasp.t_s,
         grasp.map.peak_dv_v()
     );
     for row in draw_map(&grasp.map, pitch_mm, line, &centroids) {
-        println!("  |{row}|");
+        outln!("  |{row}|");
     }
-    println!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
+    outln!("Δv (mV), rows c1j (top, +y) to c5j, columns ci1 (left) to ci5 (+x):");
     for row in 0..TAXEL_ROWS {
         let values: Vec<String> = (0..TAXEL_COLS)
             .map(|col| format!("{:7.1}", grasp.map.dv_v[row][col] * 1000.0))
             .collect();
-        println!("  {}", values.join(""));
+        outln!("  {}", values.join(""));
     }
     match (&grasp.fit, line) {
         (Some(fit), Some(line)) => {
@@ -135,18 +143,31 @@ pub(super) fn show_tactile(loaded: &Loaded) -> Result<(), String> {
                 Estimate::Ridge(_) => "ridge",
                 Estimate::Oracle { .. } => "oracle",
             };
-            println!(
+            outln!(
                 "fitted line ({name}): n {:+.3} mm, α {:+.4} rad",
-                line.n_mm, line.alpha_rad
+                line.n_mm,
+                line.alpha_rad
             );
         }
-        _ => println!("no fitted line: the fit failed"),
+        _ => outln!("no fitted line: the fit failed"),
     }
     if let Some(truth) = &grasp.truth {
-        println!(
+        outln!(
             "true line:            n {:+.3} mm, α {:+.4} rad",
-            truth.line.n_mm, truth.line.alpha_rad
+            truth.line.n_mm,
+            truth.line.alpha_rad
         );
+    }
+    if let Some(file) = file {
+        let title = format!(
+            "Tactile map at the {name}, {} seed {}",
+            record.task, record.seed
+        );
+        let truth = grasp.truth.as_ref().map(|t| t.line);
+        TactileFigure::new(grasp.map, &fit_config, truth, title)
+            .and_then(|figure| save(&figure, file))
+            .map_err(|e| e.to_string())?;
+        outln!("drew the map in {}", file.display());
     }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! The choice of estimator: the paper's centroids, cablecell's ridge, or,
 //! on a simulated cell, the truth itself.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::fit::{FitConfig, FitError, WireFit, fit_wire};
@@ -9,7 +10,7 @@ use super::ridge_fit::{RidgeFit, fit_ridge};
 use crate::geometry::LineInSensor;
 
 /// How a Δv map becomes the cable's line on the pad.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Estimator {
     /// The paper's: row or column centroids and a least-squares line.
@@ -23,7 +24,7 @@ pub enum Estimator {
 }
 
 /// An estimator's answer, with its own details.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 #[serde(tag = "estimator", rename_all = "snake_case")]
 pub enum Estimate {
     Centroids(WireFit),

@@ -28,6 +28,7 @@
 use std::fmt;
 
 use nalgebra::{SMatrix, SVector, Vector2};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::map::{TAXEL_COLS, TAXEL_ROWS, TactileMap, taxel_x_mm, taxel_y_mm};
@@ -37,7 +38,7 @@ use crate::geometry::LineInSensor;
 pub const PAPER_PITCH_MM: f64 = 3.55;
 
 /// Which way the cable mainly runs across the pad.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Direction {
     /// Along x: one centroid per column, eq. 5, and `y = a x² + b x + c`.
@@ -60,7 +61,7 @@ impl fmt::Display for Direction {
 pub const CONTACT_THRESHOLD_V: std::ops::RangeInclusive<f64> = 0.001..=3.3;
 
 /// The pad's geometry and when a taxel counts as touched.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct FitConfig {
     /// Distance between neighbouring taxel centres.
@@ -87,7 +88,7 @@ const LINES: usize = TAXEL_COLS;
 const _: () = assert!(TAXEL_ROWS == TAXEL_COLS);
 
 /// One centroid of eq. 5 (a column's) or eq. 6 (a row's).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, JsonSchema)]
 pub struct Centroid {
     pub x_mm: f64,
     pub y_mm: f64,
@@ -97,15 +98,17 @@ pub struct Centroid {
 
 /// `y = a x² + b x + c` for a horizontal cable (eq. 3), `x = a y² + b y + c`
 /// for a vertical one (eq. 4); lengths in mm, so `a` is in 1/mm.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, JsonSchema)]
 pub struct Quadratic {
+    #[serde(rename = "a_per_mm")]
     pub a: f64,
     pub b: f64,
+    #[serde(rename = "c_mm")]
     pub c: f64,
 }
 
 /// Everything the wire-parameter step found in one tactile map.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, JsonSchema)]
 pub struct WireFit {
     pub direction: Direction,
     /// The paper's h: the smallest column sum of (clamped) Δv.

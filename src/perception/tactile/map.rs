@@ -4,6 +4,7 @@
 //! `[i - 1][j - 1]`. Row 0 is the top row (y = +2·pitch), column 0 the left
 //! column (x = -2·pitch); row-major order is c11, c12, …, c15, c21, …, c55.
 
+use schemars::JsonSchema;
 use serde::Serialize;
 
 pub const TAXEL_ROWS: usize = 5;
@@ -44,7 +45,7 @@ pub fn taxel_y_mm(row: usize, pitch_mm: f64) -> f64 {
 ///
 /// Positive Δv means the silicone is pressed there. A taxel flagged in
 /// `saturated` read the ADC's full scale, so its Δv is only a lower bound.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, JsonSchema)]
 pub struct TactileMap {
     pub dv_v: [[f64; TAXEL_COLS]; TAXEL_ROWS],
     pub saturated: [[bool; TAXEL_COLS]; TAXEL_ROWS],

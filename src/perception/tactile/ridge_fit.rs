@@ -46,6 +46,7 @@
 use std::f64::consts::SQRT_2;
 
 use nalgebra::{SMatrix, SVector};
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::fit::{Direction, FitConfig, FitError};
@@ -97,7 +98,7 @@ const AMPLITUDE: usize = 2;
 const SIGMA: usize = 3;
 
 /// The ridge that best explains a tactile map.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, JsonSchema)]
 pub struct RidgeFit {
     /// The cable's centre line, α in (-π/2, π/2].
     pub line: LineInSensor,

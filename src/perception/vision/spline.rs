@@ -4,6 +4,7 @@
 //! there comes from the points at s = 0.45 and s = 0.55.
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use schemars::JsonSchema;
 
 /// Length of cable, in pixels, per control point: fine enough to follow a
 /// bend of a few cable widths, coarse enough to smooth pixel staircases.
@@ -16,7 +17,7 @@ const MAX_CONTROL_POINTS: usize = 24;
 const SMOOTHING: f64 = 1e-6;
 
 /// A clamped B-spline curve in the image plane.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
 pub struct BSpline {
     /// Polynomial degree (3, lower only when fitted to very few points).
     pub degree: usize,

@@ -25,12 +25,14 @@ const POLYLINE_SPACING_PX: f64 = 6.0;
 /// `NNNNN_mask_all.png` and `NNNNN.txt` (line K: `N x0 y0 x1 y1 ...`, the
 /// K-th cable's centre line, integer pixels as in cables-dev). Image i is
 /// drawn from stream i of a generator seeded with `seed`, so it does not
-/// depend on `count`.
+/// depend on `count`. `written` is called after each image (a progress
+/// bar's tick).
 pub fn write_dataset(
     dir: &Path,
     count: usize,
     seed: u64,
     options: &SceneOptions,
+    mut written: impl FnMut(),
 ) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|source| RenderError::Io {
         path: dir.to_path_buf(),
@@ -39,6 +41,7 @@ pub fn write_dataset(
     for index in 0..count {
         let rendered = dataset_scene(seed, index as u64, options)?;
         write_scene_files(dir, &format!("{index:05}"), &rendered)?;
+        written();
     }
     Ok(())
 }

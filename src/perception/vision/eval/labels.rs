@@ -3,6 +3,7 @@
 //! drawn at one width, explain the labelled masks.
 
 use opencv::prelude::*;
+use schemars::JsonSchema;
 
 use super::dataset::GroundTruth;
 use super::measure::{count, dice, distance_to_polylines, mean};
@@ -54,7 +55,7 @@ const LABEL_THICKNESSES_PX: std::ops::RangeInclusive<i32> = 1..=15;
 /// images best. Masks drawn by hand beside the cables hold every method's
 /// union DICE down with them: this measures how far the labels agree with
 /// themselves, as a reference, not a bound.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
 pub struct LabelConsistency {
     /// The drawn lines' area over their length (OpenCV draws a line of
     /// thickness t about t + 2 px wide).

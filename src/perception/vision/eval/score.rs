@@ -5,6 +5,7 @@
 use opencv::core::{self, Mat};
 use opencv::imgproc;
 use opencv::prelude::*;
+use schemars::JsonSchema;
 
 use super::dataset::GroundTruth;
 use super::measure::{count, dice, distance_to_polylines, mean, overlap, size_of};
@@ -13,7 +14,7 @@ use crate::perception::vision::paths::polyline_length;
 use crate::perception::vision::pipeline::{CableInstance, VisionOutput};
 
 /// How one image's result compares with its truth.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
 pub struct ImageScore {
     /// Intersection over union of the predicted and true union masks.
     pub union_iou: f64,
@@ -72,7 +73,7 @@ pub const MATCH_MIN_DICE: f64 = 0.15;
 const AT_BORDER_PX: i32 = 10;
 
 /// A cable on one side of the comparison that none on the other matches.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
 pub struct Unmatched {
     /// The labelled cable's number (`NNNNN_mask_K.png`, line K + 1 of
     /// `NNNNN.txt`) or the found one's (in the pipeline's order).
@@ -280,7 +281,7 @@ pub fn score_cables(
 
 /// Scores over a data set: means of the per-image scores (the distance
 /// means over the images that have them).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
 pub struct ScoreSummary {
     pub images: usize,
     /// Fraction of images with the right number of instances.

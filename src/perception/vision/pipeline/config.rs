@@ -2,6 +2,7 @@
 //! split into cables, and the sizes and lengths that judge what is found.
 
 use opencv::core::Rect;
+use schemars::JsonSchema;
 
 use crate::perception::vision::superpixels;
 #[cfg(doc)]
@@ -10,7 +11,7 @@ use {
 };
 
 /// How the cables' mask is made.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum MaskMethod {
     /// The classical threshold when the background is plain and its mask
@@ -24,7 +25,7 @@ pub enum MaskMethod {
 }
 
 /// How the mask is split into cables.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum InstanceMethod {
     /// Skeleton graph, its branches paired at junctions by least bending

@@ -2,6 +2,7 @@
 //! how it found them.
 
 use opencv::core::Mat;
+use schemars::JsonSchema;
 
 use super::config::MaskMethod;
 use crate::perception::vision::mask::BackgroundStats;
@@ -11,7 +12,7 @@ use {super::config::VisionConfig, crate::perception::vision::mask};
 
 /// One cable found in the image, in full-image pixel coordinates (x right,
 /// y down), whatever the region of interest.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, JsonSchema)]
 pub struct CableInstance {
     /// The cable's model, s = 0 at one end (the one with the smaller x) and
     /// s = 1 at the other.
