@@ -16,6 +16,7 @@ fn campaign(trials: usize, out: &Path, record: bool) -> Campaign {
         seed: Some(1),
         out: Some(out.to_owned()),
         no_record: !record,
+        shard: None,
     };
     Campaign::load(&path, overrides).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -12,9 +12,11 @@ use clap::{Parser, Subcommand};
 ///
 /// Exit status: 0 success; 1 the task failed (e.g. tolerance not reached in
 /// the allowed regrasps, no cable on the pad); 2 bad input (command line,
-/// task, cell, campaign or map file); 3 device fault (the cell was made
-/// safe, or a bring-up command's device failed); 4 the output (a journal, a
-/// file, a folder) could not be written or read back.
+/// task, cell, campaign or map file, a task beyond its cell's limits, a
+/// model that is no network, shards that are not one campaign); 3 device
+/// fault (the cell was made safe, or a bring-up command's device failed);
+/// 4 the output (a journal, a file, a folder) could not be written or read
+/// back.
 #[derive(Parser)]
 #[command(version, about, long_about)]
 struct Args {
@@ -93,19 +95,28 @@ enum Command {
     },
     /// Run a campaign: many seeded trials of a task, each policy of the file
     /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
-    /// summarised side by side.
+    /// summarised side by side; or merge a sharded campaign's folders
+    /// (`campaign merge DIR…`).
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
     Campaign {
+        #[command(subcommand)]
+        merge: Option<CampaignCommand>,
         /// The campaign file, e.g. tasks/paper-regrasp-campaign.toml.
-        file: PathBuf,
+        #[arg(required = true)]
+        file: Option<PathBuf>,
         /// Trials per policy (default: the file's).
         #[arg(long, value_parser = trials)]
         trials: Option<usize>,
         /// The campaign's seed (default: the file's).
         #[arg(long)]
         seed: Option<u64>,
-        /// Output folder (default: the file's).
+        /// Output folder (default: the file's; OUT/shard-K-of-N with --shard).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Run only shard K of N (0 ≤ K < N): the trials i with i mod N = K.
+        /// `campaign merge` gathers the shards' folders.
+        #[arg(long, value_parser = shard)]
+        shard: Option<cablecell::campaign::shard::Shard>,
         /// Continue the campaign recorded in the output folder.
         #[arg(long)]
         resume: bool,
@@ -211,6 +222,25 @@ enum Command {
 }
 
 #[derive(Subcommand)]
+enum CampaignCommand {
+    /// Check that the folders are every shard of one campaign, each once,
+    /// holding every trial once, and print the whole campaign's summary.
+    Merge {
+        /// The shards' output folders (each with campaign.json and
+        /// trials.jsonl).
+        #[arg(required = true)]
+        folders: Vec<PathBuf>,
+        /// Also write the merged campaign here, as the whole campaign's
+        /// output folder (journal, campaign.json, recordings).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Subcommand)]
 enum DeviceCommand {
     /// The Schunk PG70 over SMP.
     Gripper {
@@ -250,6 +280,11 @@ enum DeviceCommand {
 /// 0 (as fast as it goes) to 1000 cell seconds a second.
 fn pace(text: &str) -> Result<f64, String> {
     cli::number_within(text, 0.0..=1000.0, "")
+}
+
+fn shard(text: &str) -> Result<cablecell::campaign::shard::Shard, String> {
+    text.parse()
+        .map_err(|e: cablecell::campaign::run::CampaignError| e.to_string())
 }
 
 fn trials(text: &str) -> Result<usize, String> {
@@ -308,10 +343,16 @@ fn main() -> ExitCode {
         Command::JsonSchema { output } => cli::json::json_schema(output),
         Command::Plot { figure } => cli::plot::plot(&figure),
         Command::Campaign {
-            file,
+            merge: Some(CampaignCommand::Merge { folders, out, json }),
+            ..
+        } => cli::campaign::merge(&folders, out.as_deref(), json),
+        Command::Campaign {
+            merge: None,
+            file: Some(file),
             trials,
             seed,
             out,
+            shard,
             resume,
             json,
             threads,
@@ -322,11 +363,16 @@ fn main() -> ExitCode {
                 seed,
                 out,
                 no_record,
+                shard,
             };
             let threads = threads.unwrap_or_else(|| {
                 std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
             });
             cli::campaign::campaign(&file, overrides, resume, json, threads)
+        }
+        Command::Campaign { file: None, .. } => {
+            eprintln!("error: the campaign file is missing: cablecell campaign FILE");
+            cli::Status::BadInput
         }
         Command::Detect {
             images,

@@ -81,6 +81,37 @@ fn line_of(path: &Path, needle: &str) -> usize {
 }
 
 #[test]
+fn a_task_faster_than_the_cell_allows_is_refused_at_load() {
+    // Before, the run started and the arm refused the approach: a device
+    // fault (3) after the cell had moved.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = edited_task(&dir, "speed_mm_s = 100.0", "speed_mm_s = 400.0");
+    let run = cablecell(&["run", path.to_str().expect("utf-8 path"), "--seed", "1"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(BAD_INPUT), "{stderr}");
+    let line = line_of(&path, "speed_mm_s");
+    assert_eq!(
+        stderr,
+        format!(
+            "error: {}:{line}:1: approach.speed_mm_s: expected a value in (0, 250] mm/s \
+             (arm.max_speed_mm_s of config/cell.sim.toml), found 400\n",
+            path.display()
+        )
+    );
+    assert!(run.stdout.is_empty(), "nothing ran");
+    // At the cell's limit it runs.
+    let path = edited_task(&dir, "speed_mm_s = 100.0", "speed_mm_s = 250.0");
+    let run = cablecell(&[
+        "run",
+        path.to_str().expect("utf-8 path"),
+        "--seed",
+        "1",
+        "--no-record",
+    ]);
+    assert_ne!(run.status.code(), Some(BAD_INPUT));
+}
+
+#[test]
 fn unknown_key_names_file_line_column_and_field() {
     let (err, path, _dir) =
         check_error("retreat_mm = 30.0", "retreat_mm = 30.0\nretreat_speed = 4");

@@ -274,6 +274,7 @@ fn every_campaign_trial_is_recorded() {
         seed: Some(5),
         out: Some(dir.path().to_owned()),
         no_record: false,
+        shard: None,
     };
     let campaign =
         Campaign::load(&root().join("tasks/paper-regrasp-campaign.toml"), overrides).unwrap();

@@ -286,7 +286,35 @@ fn a_missing_network_or_a_file_that_is_none_is_bad_input() {
     );
 }
 
-/// The network and its runtime are found where the set-up put them from
+#[test]
+fn eval_vision_with_a_model_that_is_no_network_is_bad_input() {
+    // It exited with 1 (as if an image had failed) before; every image
+    // would fail alike, so the command line is at fault.
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_scene(
+        dir.path(),
+        "00000",
+        vec![cable([80.0, 120.0], [560.0, 360.0])],
+        true,
+    );
+    for more in [&[][..], &["--sweep", "--rounds", "1"]] {
+        let mut args = vec!["eval-vision", text(dir.path()), "--model", "README.md"];
+        args.extend(more);
+        let stderr = refused(&args);
+        assert!(
+            stderr.contains("segmentation network inference failed: model README.md"),
+            "{more:?}: {stderr}"
+        );
+    }
+    let stderr = refused(&[
+        "eval-vision",
+        text(dir.path()),
+        "--model",
+        "/no/such/model.onnx",
+    ]);
+    assert!(stderr.contains("/no/such/model.onnx"), "{stderr}");
+}
+
 /// any working directory, with nothing in the environment pointing there.
 #[test]
 fn detect_finds_the_network_from_any_working_directory() {

@@ -3,7 +3,9 @@
 //! summarised (`stats`, `summary`).
 
 pub mod journal;
+pub mod merge;
 pub mod run;
+pub mod shard;
 pub mod stats;
 pub mod summary;
 pub mod trial;

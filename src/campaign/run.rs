@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 
 use super::journal::{Journal, JournalError, Recovered};
+use super::shard::{Shard, ShardMeta, Stray, identity};
 use super::trial::{TrialEntry, run_trial};
 use crate::cell::CellFile;
 use crate::schema::ConfigError;
@@ -47,6 +48,82 @@ pub enum CampaignError {
         line: usize,
         reason: String,
     },
+    /// `--shard` is not `K/N` with 0 ≤ K < N ≤ 10 000.
+    #[error("`{text}` is no shard K/N: {reason}")]
+    BadShard { text: String, reason: &'static str },
+    /// A file of an output folder (its `campaign.json`, a recording a merge
+    /// links or copies) could not be read or written.
+    #[error("{}: {source}", path.display())]
+    FolderIo {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An output folder's `campaign.json` is not what a campaign writes.
+    #[error("{}:{}: not a campaign's metadata: {source}", path.display(), source.line())]
+    BadMeta {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// An output folder belongs to another campaign (or another shard) than
+    /// the one it is resumed or merged with.
+    #[error("{}:1: {field} is {found}, but {against} has {expected}", path.display())]
+    OtherCampaign {
+        path: PathBuf,
+        field: &'static str,
+        found: String,
+        expected: String,
+        /// What it was compared with: this command, or another folder.
+        against: String,
+    },
+    /// `campaign merge` was given a folder without `campaign.json`: not the
+    /// output folder of a campaign run since shards were recorded.
+    #[error("{}: no campaign.json here, so not a campaign's output folder", path.display())]
+    NotAShard { path: PathBuf },
+    /// Two folders given to `campaign merge` hold the same shard.
+    #[error("{}: shard {shard} again, already merged from {}", path.display(), first.display())]
+    ShardTwice {
+        path: PathBuf,
+        first: PathBuf,
+        shard: Shard,
+    },
+    /// `campaign merge` lacks shards of the campaign.
+    #[error("shard(s) {} of {count} missing: only {} given", missing.iter().map(ToString::to_string).collect::<Vec<_>>().join(", "), given.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "))]
+    ShardsMissing {
+        missing: Vec<usize>,
+        count: usize,
+        given: Vec<PathBuf>,
+    },
+    /// A shard's journal is not its shard's trials.
+    #[error("{}:{line}: {stray}", path.display())]
+    Stray {
+        path: PathBuf,
+        /// 1-based line of the entry.
+        line: usize,
+        stray: Stray,
+    },
+    /// A trial is recorded twice among the merged journals.
+    #[error("{}:{line}: trial {trial} of policy `{policy}` is already recorded at {}:{first_line}", path.display(), first.display())]
+    TrialTwice {
+        path: PathBuf,
+        line: usize,
+        first: PathBuf,
+        first_line: usize,
+        trial: usize,
+        policy: String,
+    },
+    /// A shard's journal lacks trials: the shard did not finish (or its
+    /// last trial was cut short by a kill). Resume it, then merge again.
+    #[error("{}: lacks trial {trial} of policy `{policy}`{}: finish it with `cablecell campaign FILE --shard {shard} --out {} --resume`", path.display(), if *more > 0 { format!(" and {more} more") } else { String::new() }, folder.display())]
+    TrialsMissing {
+        path: PathBuf,
+        folder: PathBuf,
+        shard: Shard,
+        trial: usize,
+        policy: String,
+        more: usize,
+    },
 }
 
 /// What the command line may override in a campaign file.
@@ -57,6 +134,8 @@ pub struct Overrides {
     pub out: Option<PathBuf>,
     /// Write no recording of the trials.
     pub no_record: bool,
+    /// Run only this shard's trials (by default into `OUT/shard-K-of-N`).
+    pub shard: Option<Shard>,
 }
 
 /// A campaign file with its task and cell loaded and overrides applied.
@@ -70,16 +149,37 @@ pub struct Campaign {
     pub out: PathBuf,
     /// Whether each trial is recorded in `recordings_folder`.
     pub record: bool,
+    /// The trials this run holds: all of them, or one shard's.
+    pub shard: Shard,
+    /// CRC-64 of the campaign, task and cell files' text (`ShardMeta`).
+    pub identity: String,
 }
 
 impl Campaign {
     pub fn load(path: &Path, overrides: Overrides) -> Result<Self, CampaignError> {
         let (file, task, cell) = load_campaign(path)?;
+        let texts = [path.to_owned(), file.task_path(path), file.cell_path(path)]
+            .iter()
+            .map(|path| {
+                std::fs::read(path).map_err(|source| ConfigError::Read {
+                    path: path.clone(),
+                    source,
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let shard = overrides.shard.unwrap_or(Shard::WHOLE);
+        let out = match (overrides.out, overrides.shard) {
+            (Some(out), _) => out,
+            (None, Some(shard)) => shard.folder_in(&file.campaign.out),
+            (None, None) => file.campaign.out.clone(),
+        };
         Ok(Self {
             trials: overrides.trials.unwrap_or(file.campaign.trials),
             seed: overrides.seed.unwrap_or(file.campaign.seed),
-            out: overrides.out.unwrap_or_else(|| file.campaign.out.clone()),
+            out,
             record: !overrides.no_record,
+            shard,
+            identity: identity(&texts.iter().map(Vec::as_slice).collect::<Vec<_>>()),
             file,
             task,
             cell,
@@ -99,15 +199,54 @@ impl Campaign {
         self.file.policies.iter().map(|p| p.name.clone()).collect()
     }
 
+    /// What `OUT/campaign.json` says of this run.
+    pub fn meta(&self) -> ShardMeta {
+        ShardMeta {
+            name: self.file.campaign.name.clone(),
+            identity: self.identity.clone(),
+            seed: self.seed,
+            trials: self.trials,
+            policies: self.policy_names(),
+            shard: self.shard,
+        }
+    }
+
+    /// Refuses an output folder whose `campaign.json` is another campaign's
+    /// (its files edited since) or another shard's. Its trials may differ:
+    /// a resume may run more of them.
+    fn check_resumed_meta(&self) -> Result<(), CampaignError> {
+        let Some(found) = ShardMeta::read(&self.out)? else {
+            return Ok(());
+        };
+        let expected = self.meta();
+        let mismatch = [
+            ("identity", found.identity, expected.identity),
+            ("shard", found.shard.to_string(), expected.shard.to_string()),
+        ]
+        .into_iter()
+        .find(|(_, found, expected)| found != expected);
+        match mismatch {
+            Some((field, found, expected)) => Err(CampaignError::OtherCampaign {
+                path: ShardMeta::path_in(&self.out),
+                field,
+                found,
+                expected,
+                against: "this command (its campaign, task and cell files, --shard)".to_owned(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Refuses a resumed journal whose entries are not this campaign's
     /// trials, naming the first offending line: another seed, a trial
-    /// beyond `trials`, a policy the campaign file lacks, or a trial
-    /// recorded twice (which no campaign writes).
+    /// beyond `trials`, a policy the campaign file lacks, another shard's
+    /// trial, or a trial recorded twice (which no campaign writes).
     fn check_resumed(
         &self,
         path: &Path,
         recovered: &Recovered<TrialEntry>,
     ) -> Result<(), CampaignError> {
+        let meta = self.meta();
         let mut seen = HashMap::new();
         for (entry, &line) in recovered.entries.iter().zip(&recovered.lines) {
             let foreign = |reason: String| CampaignError::Foreign {
@@ -115,28 +254,35 @@ impl Campaign {
                 line,
                 reason,
             };
-            if entry.campaign_seed != self.seed {
-                return Err(CampaignError::SeedMismatch {
-                    path: path.to_owned(),
-                    line,
-                    found: entry.campaign_seed,
-                    expected: self.seed,
-                });
-            }
-            if entry.trial >= self.trials {
-                return Err(foreign(format!(
-                    "trial {} is beyond the campaign's {} trials: resume with --trials {} or more",
-                    entry.trial,
-                    self.trials,
-                    entry.trial + 1
-                )));
-            }
-            if !self.file.policies.iter().any(|p| p.name == entry.policy) {
-                return Err(foreign(format!(
-                    "policy `{}` is not one of the campaign file's ({})",
-                    entry.policy,
-                    self.policy_names().join(", ")
-                )));
+            match meta.stray(entry) {
+                Some(Stray::OtherSeed { found }) => {
+                    return Err(CampaignError::SeedMismatch {
+                        path: path.to_owned(),
+                        line,
+                        found,
+                        expected: self.seed,
+                    });
+                }
+                Some(Stray::Beyond { trial }) => {
+                    return Err(foreign(format!(
+                        "trial {trial} is beyond the campaign's {} trials: resume with --trials {} or more",
+                        self.trials,
+                        trial + 1
+                    )));
+                }
+                Some(Stray::UnknownPolicy { policy }) => {
+                    return Err(foreign(format!(
+                        "policy `{policy}` is not one of the campaign file's ({})",
+                        self.policy_names().join(", ")
+                    )));
+                }
+                Some(stray @ Stray::OtherShard { .. }) => {
+                    return Err(foreign(format!(
+                        "{stray}, not to shard {}: resume with the --shard that wrote it",
+                        self.shard
+                    )));
+                }
+                None => {}
             }
             if let Some(first) = seen.insert((entry.trial, entry.policy.as_str()), line) {
                 return Err(JournalError::Corrupt {
@@ -153,7 +299,8 @@ impl Campaign {
         Ok(())
     }
 
-    /// Runs every trial the journal lacks (all of them unless `resume`),
+    /// Runs every trial of its shard the journal lacks (all of them unless
+    /// `resume`),
     /// calling `on_entry` as each one is recorded. Returns the campaign's
     /// entries, old and new, ordered by policy and trial.
     pub fn run(
@@ -171,6 +318,7 @@ impl Campaign {
                     "dropped a trial cut short when the campaign was stopped; it runs again"
                 );
             }
+            self.check_resumed_meta()?;
             self.check_resumed(&path, &recovered)?;
             (journal, recovered.entries)
         } else {
@@ -179,6 +327,7 @@ impl Campaign {
             }
             (Journal::create(&path)?, Vec::new())
         };
+        self.meta().write(&self.out)?;
         let policies = &self.file.policies;
         let jobs: Vec<(usize, usize)> = {
             let done: HashSet<(usize, &str)> = entries
@@ -186,6 +335,7 @@ impl Campaign {
                 .map(|e| (e.trial, e.policy.as_str()))
                 .collect();
             (0..self.trials)
+                .filter(|&trial| self.shard.holds(trial))
                 .flat_map(|trial| (0..policies.len()).map(move |policy| (trial, policy)))
                 .filter(|&(trial, policy)| !done.contains(&(trial, policies[policy].name.as_str())))
                 .collect()

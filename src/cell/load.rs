@@ -65,7 +65,7 @@ fn check_devices(cell: &CellFile) -> Result<(), (&'static [&'static str], String
 /// A cell file's schema, its paths made relative to its folder, and the
 /// checks that span several tables. The vision detector's are made here,
 /// before the cell moves, rather than when it first looks at the camera.
-pub(crate) fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
+pub fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
     let cell = parse_resolved(path, text)?;
     let DetectorBackend::Vision(vision) = &cell.detector.backend else {
         return Ok(cell);

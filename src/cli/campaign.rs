@@ -1,9 +1,11 @@
-//! `cablecell campaign FILE`
+//! `cablecell campaign FILE` and `cablecell campaign merge DIR…`
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::output::{out, outln};
 use super::{Status, progress};
+use cablecell::campaign::journal::JournalError;
+use cablecell::campaign::merge::merge as merge_shards;
 use cablecell::campaign::run::{Campaign, CampaignError, Overrides};
 use cablecell::campaign::summary::{render_table, summarise};
 use cablecell::campaign::trial::TrialEntry;
@@ -39,7 +41,9 @@ pub fn campaign(
                 CampaignError::Config(_)
                 | CampaignError::Exists { .. }
                 | CampaignError::SeedMismatch { .. }
-                | CampaignError::Foreign { .. } => Status::BadInput,
+                | CampaignError::Foreign { .. }
+                | CampaignError::OtherCampaign { .. }
+                | CampaignError::BadMeta { .. } => Status::BadInput,
                 _ => Status::OutputFailed,
             };
         }
@@ -53,15 +57,68 @@ pub fn campaign(
     );
     if json {
         return super::json::print(&summary);
-    } else {
-        out!("{}", render_table(&summary));
-        outln!("trials recorded in {}", campaign.journal_path().display());
-        if campaign.record {
-            outln!(
-                "each trial's recording in {}",
-                campaign.recordings_folder().display()
-            );
+    }
+    out!("{}", render_table(&summary));
+    if campaign.shard.count > 1 {
+        outln!(
+            "shard {} of the campaign (its trials i with i mod {} = {})",
+            campaign.shard,
+            campaign.shard.count,
+            campaign.shard.index
+        );
+    }
+    outln!("trials recorded in {}", campaign.journal_path().display());
+    if campaign.record {
+        outln!(
+            "each trial's recording in {}",
+            campaign.recordings_folder().display()
+        );
+    }
+    Status::Success
+}
+
+/// Checks that `folders` are the shards of one campaign and prints its
+/// summary, the same as the whole campaign's; writes the merged folder to
+/// `out` if given. Anything wrong with the shards is bad input (2); only
+/// writing `out` can fail with 4.
+pub fn merge(folders: &[PathBuf], out: Option<&Path>, json: bool) -> Status {
+    let merged = match merge_shards(folders) {
+        Ok(merged) => merged,
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
         }
+    };
+    if let Some(out) = out
+        && let Err(error) = merged.write(out)
+    {
+        eprintln!("error: {error}");
+        return match error {
+            CampaignError::Exists { .. }
+            | CampaignError::Journal(JournalError::AlreadyExists { .. }) => Status::BadInput,
+            _ => Status::OutputFailed,
+        };
+    }
+    let meta = &merged.meta;
+    let summary = summarise(
+        &meta.name,
+        meta.seed,
+        meta.trials,
+        &meta.policies,
+        &merged.entries,
+    );
+    if json {
+        return super::json::print(&summary);
+    }
+    out!("{}", render_table(&summary));
+    outln!(
+        "merged {} shards of campaign {} ({})",
+        folders.len(),
+        meta.name,
+        meta.identity
+    );
+    if let Some(out) = out {
+        outln!("trials recorded in {}", out.join("trials.jsonl").display());
     }
     Status::Success
 }

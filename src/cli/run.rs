@@ -14,7 +14,7 @@ use cablecell::perception::shape::Distances;
 use cablecell::record::{GraspRecord, RunReport, ShapeErrors, TransitionRecord};
 use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::recording::{LiveServer, RecordingTarget};
-use cablecell::task::load_task;
+use cablecell::task::{load_task, load_task_on_cell};
 
 use super::Status;
 use super::output::outln;
@@ -106,10 +106,21 @@ pub fn run(
     json: bool,
     record: &RecordArgs,
 ) -> Status {
-    let (task, cell) = match (load_task(task_path), load_cell(cell_path)) {
-        (Ok(task), Ok(cell)) => (task, cell),
-        (task, cell) => {
-            for error in [task.err(), cell.err()].into_iter().flatten() {
+    // Both files' errors at once; the task is checked against the cell
+    // when the cell loads.
+    let (task, cell) = match load_cell(cell_path) {
+        Ok(cell) => match load_task_on_cell(task_path, cell_path, &cell) {
+            Ok(task) => (task, cell),
+            Err(error) => {
+                eprintln!("error: {error}");
+                return Status::BadInput;
+            }
+        },
+        Err(error) => {
+            for error in [load_task(task_path).err(), Some(error)]
+                .into_iter()
+                .flatten()
+            {
                 eprintln!("error: {error}");
             }
             return Status::BadInput;

@@ -5,8 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::cell::CellFile;
 use crate::schema::toml_file::{ConfigError, parse, read};
-use crate::task::{TaskFile, parse_task};
+use crate::task::{TaskFile, check_on_cell, parse_task};
 
 /// Why a parameter could not be set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -27,12 +28,32 @@ pub struct TaskParams {
     path: PathBuf,
     table: toml::Table,
     task: TaskFile,
+    /// The cell the task runs on, with its file, whose limits a value
+    /// must also keep (`check_on_cell`).
+    cell: Option<(PathBuf, CellFile)>,
 }
 
 impl TaskParams {
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        Self::load_with(path, None)
+    }
+
+    /// The task file at `path` for the cell `cell` (read from `cell_path`):
+    /// a value beyond the cell's limits is refused at load and by `set`.
+    pub fn load_on_cell(
+        path: &Path,
+        cell_path: &Path,
+        cell: &CellFile,
+    ) -> Result<Self, ConfigError> {
+        Self::load_with(path, Some((cell_path.to_owned(), cell.clone())))
+    }
+
+    fn load_with(path: &Path, cell: Option<(PathBuf, CellFile)>) -> Result<Self, ConfigError> {
         let text = read(path)?;
         let task = parse_task(path, &text)?;
+        if let Some((cell_path, cell)) = &cell {
+            check_on_cell(path, &text, &task, cell_path, cell)?;
+        }
         let mut table: toml::Table = parse(path, &text)?;
         // Optional values with a default are parameters too, at the value
         // the task file's loader gave them.
@@ -46,6 +67,7 @@ impl TaskParams {
             path: path.to_owned(),
             table,
             task,
+            cell,
         })
     }
 
@@ -99,7 +121,13 @@ impl TaskParams {
             }
         }
         let text = toml::to_string(&table).map_err(|e| invalid(e.to_string()))?;
-        let task = parse_task(&self.path, &text).map_err(|error| match error {
+        let checked = parse_task(&self.path, &text).and_then(|task| match &self.cell {
+            Some((cell_path, cell)) => {
+                check_on_cell(&self.path, &text, &task, cell_path, cell).map(|()| task)
+            }
+            None => Ok(task),
+        });
+        let task = checked.map_err(|error| match error {
             ConfigError::Invalid { message, .. } => invalid(message),
             other => invalid(other.to_string()),
         })?;
@@ -150,6 +178,25 @@ mod tests {
         assert!(list.contains(&("tactile.estimator".into(), "\"centroids\"".into())));
         assert!(list.contains(&("regrasp.correction_gain.n".into(), "1.0".into())));
         assert!(!list.iter().any(|(name, _)| name.starts_with("task.")));
+    }
+
+    #[test]
+    fn on_a_cell_a_speed_beyond_its_arm_is_refused_and_the_task_kept() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let cell_path = root.join("config/cell.sim.toml");
+        let cell = crate::cell::load_cell(&cell_path).unwrap();
+        let mut p =
+            TaskParams::load_on_cell(&root.join("tasks/regrasp.toml"), &cell_path, &cell).unwrap();
+        let error = p.set("approach.speed_mm_s", "250.5").unwrap_err();
+        assert!(
+            error
+                .to_string()
+                .starts_with("approach.speed_mm_s: expected a value in (0, 250] mm/s"),
+            "{error}"
+        );
+        assert_eq!(p.task().approach.speed_mm_s, 100.0);
+        p.set("approach.speed_mm_s", "250").unwrap();
+        assert_eq!(p.task().approach.speed_mm_s, 250.0);
     }
 
     #[test]

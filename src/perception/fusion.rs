@@ -31,6 +31,11 @@ pub const BEND_PRIOR_CURVATURE_PER_MM: f64 = 1.0 / 200.0;
 /// Over about this length a cable's curvature keeps its value.
 pub const BEND_PRIOR_LENGTH_MM: f64 = 50.0;
 
+/// Points spread over more than this are no one cable the cell can
+/// grasp (its arm reaches about a metre): such a shape would be a point a
+/// millimetre for ever, and its control points would overflow a count.
+const MAX_FUSED_LENGTH_MM: f64 = 10_000.0;
+
 /// Below this a point's σ counts as this: a source that claims to be exact
 /// (a noiseless oracle) must not make the system singular.
 const MIN_SIGMA_MM: f64 = 0.01;
@@ -45,7 +50,7 @@ const MIN_SIGMA_MM: f64 = 0.01;
 ///
 /// The cable must run along the frame's x and not turn back on itself
 /// along it (a cable between two supports, grasped across). `None` if the
-/// points span no length.
+/// points span no length, or more than any cable (10 m).
 pub fn fuse(
     sources: &[&[ShapePoint]],
     base_from_plane: &Isometry3<f64>,
@@ -72,7 +77,7 @@ pub fn fuse(
         .map(|(p, _)| p.x)
         .fold(f64::NEG_INFINITY, f64::max);
     let length_mm = x_max - x_min;
-    if length_mm <= SHAPE_SPACING_MM {
+    if length_mm <= SHAPE_SPACING_MM || length_mm > MAX_FUSED_LENGTH_MM {
         return None;
     }
     // x is the parameter itself; the curve fitted is (y, z) against it.
@@ -261,5 +266,23 @@ mod tests {
         // An exact point does not break the fit.
         let exact = points(-9..=9, |_| 0.0, 0.0);
         assert!(fuse(&[&exact], &base_from_plane()).is_some());
+    }
+
+    /// Found by tests/numerical_stress.rs: points 1e300 mm apart made the
+    /// control point count overflow (a panic), and would have made the
+    /// shape a point a millimetre for ever.
+    #[test]
+    fn points_spread_beyond_any_cable_fuse_to_nothing() {
+        let point = |x_mm: f64| ShapePoint {
+            in_base_mm: Point3::new(x_mm, 0.0, 0.0),
+            sigma_mm: 0.1,
+        };
+        let far = [point(0.0), point(1.0), point(1e300)];
+        assert!(fuse(&[&far], &Isometry3::identity()).is_none());
+        let cable = [point(0.0), point(10.0), point(20.0), point(30.0)];
+        assert_eq!(
+            fuse(&[&cable], &Isometry3::identity()).map(|s| s.len()),
+            Some(31)
+        );
     }
 }

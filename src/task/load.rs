@@ -48,6 +48,45 @@ pub fn parse_task(path: &Path, text: &str) -> Result<TaskFile, ConfigError> {
     Ok(task)
 }
 
+/// Loads a task file for the cell it is to run on (`check_on_cell`).
+pub fn load_task_on_cell(
+    path: &Path,
+    cell_path: &Path,
+    cell: &CellFile,
+) -> Result<TaskFile, ConfigError> {
+    let text = read(path)?;
+    let task = parse_task(path, &text)?;
+    check_on_cell(path, &text, &task, cell_path, cell)?;
+    Ok(task)
+}
+
+/// The checks between a task and its cell, so that a task the cell would
+/// refuse mid-run is refused at load, at the task file's line: its arm
+/// speed within the cell's `max_speed_mm_s` (else the arm refuses the
+/// first move, a device fault after the run had begun).
+pub fn check_on_cell(
+    path: &Path,
+    text: &str,
+    task: &TaskFile,
+    cell_path: &Path,
+    cell: &CellFile,
+) -> Result<(), ConfigError> {
+    let (speed_mm_s, max_mm_s) = (task.approach.speed_mm_s, cell.arm.max_speed_mm_s);
+    if speed_mm_s > max_mm_s {
+        return Err(invalid_at_key(
+            path,
+            text,
+            &["approach", "speed_mm_s"],
+            "approach.speed_mm_s",
+            format!(
+                "expected a value in (0, {max_mm_s}] mm/s (arm.max_speed_mm_s of {}), found {speed_mm_s}",
+                cell_path.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Validates a task, cell or campaign file, telling which by its top table.
 pub fn check_file(path: &Path) -> Result<FileKind, ConfigError> {
     let text = read(path)?;
@@ -89,7 +128,9 @@ fn parse_campaign(
             other => other,
         }
     };
-    let task = load_task(&file.task_path(path)).map_err(named_here("task"))?;
+    let task_path = file.task_path(path);
+    let task_text = read(&task_path).map_err(named_here("task"))?;
+    let task = parse_task(&task_path, &task_text)?;
     if let Some(policy) = file.policies.iter().find(|p| p.sensing == Sensing::Touch)
         && task.prior.is_none()
     {
@@ -108,5 +149,6 @@ fn parse_campaign(
     let cell = read(&cell_path)
         .and_then(|cell_text| parse_cell(&cell_path, &cell_text))
         .map_err(named_here("cell"))?;
+    check_on_cell(&task_path, &task_text, &task, &cell_path, &cell)?;
     Ok((file, task, cell))
 }

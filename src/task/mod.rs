@@ -12,5 +12,7 @@ pub mod load;
 pub mod task_file;
 
 pub use campaign_file::CampaignFile;
-pub use load::{FileKind, check_file, load_campaign, load_task, parse_task};
+pub use load::{
+    FileKind, check_file, check_on_cell, load_campaign, load_task, load_task_on_cell, parse_task,
+};
 pub use task_file::TaskFile;

@@ -15,11 +15,11 @@ use opencv::core::Mat;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::vision_io::VisionArgs;
+use super::vision_io::{MaskArg, VisionArgs};
 use super::{Status, progress};
 use load::load_samples;
 use print::print_evaluation;
-use score::{evaluate, labels_own_dice};
+use score::{Failure, evaluate, labels_own_dice};
 use sweep::sweep;
 
 #[derive(Args, Debug, Clone)]
@@ -142,6 +142,19 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
             return Status::BadInput;
         }
     };
+    // The network is loaded before scoring unless the classical mask alone
+    // is asked for, so that a model that is no network (or no runtime) is
+    // the command line's fault, found whether or not an image needs it.
+    if !matches!(args.vision.mask, MaskArg::Classical)
+        && let Err(error) = args.vision.network().load()
+    {
+        eprintln!("error: {error}");
+        return if error.is_in_setup() {
+            Status::BadInput
+        } else {
+            Status::TaskFailed
+        };
+    }
     if args.sweep {
         return sweep(args, &samples);
     }
@@ -156,9 +169,9 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     });
     let report = match report {
         Ok(report) => report,
-        Err(message) => {
+        Err(Failure { message, status }) => {
             eprintln!("error: {message}");
-            return Status::TaskFailed;
+            return status;
         }
     };
     if args.json {

@@ -6,11 +6,12 @@ use std::path::Path;
 
 use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
-use cablecell::perception::vision::{MaskMethod, MaskNetwork, VisionOutput};
+use cablecell::perception::vision::{MaskMethod, MaskNetwork, VisionError, VisionOutput};
 use opencv::core::{Mat, Point, Scalar};
 use opencv::imgproc;
 use opencv::prelude::*;
 
+use crate::cli::Status;
 use crate::cli::vision_io::{VisionArgs, create_dir, draw_line, draw_overlay, write_png};
 
 use super::{Evaluation, LabelsOwnDice, LengthShare, MaskUse, Sample};
@@ -28,6 +29,24 @@ pub(super) fn labels_own_dice(samples: &[Sample]) -> Result<Option<LabelsOwnDice
     }))
 }
 
+/// Why an evaluation stopped, and the exit status that says whose fault it
+/// is: the command line's (2) when the pipeline's set-up failed (a model
+/// that is missing or no network, no runtime), as every image would fail
+/// alike; else an image's (1).
+pub(super) struct Failure {
+    pub(super) message: String,
+    pub(super) status: Status,
+}
+
+impl From<String> for Failure {
+    fn from(message: String) -> Self {
+        Failure {
+            message,
+            status: Status::TaskFailed,
+        }
+    }
+}
+
 /// Runs the pipeline configured by `vision` on every sample and scores it,
 /// drawing each result into `overlay` when given. The first image is run
 /// once untimed before the loop, so that loading the network and first-use
@@ -37,7 +56,15 @@ pub(super) fn evaluate(
     samples: &[Sample],
     overlay: Option<&Path>,
     bar: &ProgressBar,
-) -> Result<Evaluation, String> {
+) -> Result<Evaluation, Failure> {
+    let failed = |sample: &Sample, error: &VisionError| Failure {
+        message: format!("{}: {error}", sample.path.display()),
+        status: if error.is_in_setup() {
+            Status::BadInput
+        } else {
+            Status::TaskFailed
+        },
+    };
     if let Some(dir) = overlay {
         create_dir(dir)?;
     }
@@ -52,11 +79,11 @@ pub(super) fn evaluate(
         if k == 0 {
             pipeline
                 .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
-                .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+                .map_err(|error| failed(sample, &error))?;
         }
         let output = pipeline
             .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
-            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
+            .map_err(|error| failed(sample, &error))?;
         for (stage, ms) in &output.timings_ms {
             stage_ms.entry(stage).or_default().push(*ms);
         }

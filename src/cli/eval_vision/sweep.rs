@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::cli::Status;
 use crate::cli::vision_io::{InstancesArg, MaskArg, VisionArgs};
 
-use super::score::{evaluate, labels_own_dice};
+use super::score::{Failure, evaluate, labels_own_dice};
 use super::{EvalVisionArgs, Evaluation, Sample};
 use crate::cli::progress;
 
@@ -107,10 +107,10 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
             bar.set_message(setting.clone());
             let evaluation = match evaluate(vision, samples, None, &bar) {
                 Ok(evaluation) => evaluation,
-                Err(message) => {
+                Err(Failure { message, status }) => {
                     bar.finish_and_clear();
                     eprintln!("error: {setting}: {message}");
-                    return Status::TaskFailed;
+                    return status;
                 }
             };
             if round == 0 {

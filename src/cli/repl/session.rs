@@ -40,7 +40,8 @@ pub(super) struct Loaded {
 
 impl Session {
     pub(super) fn load(&mut self, path: &Path) -> Result<(), String> {
-        let params = TaskParams::load(path).map_err(|e| e.to_string())?;
+        let params = TaskParams::load_on_cell(path, &self.cell_path, &self.cell)
+            .map_err(|e| e.to_string())?;
         let seed = self
             .seed
             .or(params.task().task.seed)

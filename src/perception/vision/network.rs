@@ -482,19 +482,28 @@ impl LazyNetwork {
     }
 }
 
-impl MaskNetwork for LazyNetwork {
-    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        let net = match &mut self.loaded {
+impl LazyNetwork {
+    /// The network, loaded now if it was not yet: a command that will need
+    /// it calls this first, so that a model that is no network or a
+    /// missing runtime is found before any image, whatever the images.
+    pub fn load(&mut self) -> Result<&mut SegmentationNet, VisionError> {
+        let net = match self.loaded.take() {
             Some(net) => net,
             None => {
                 let mut net = SegmentationNet::load(&self.model, &self.runtime_library)
                     .map_err(|source| VisionError::Network { source })?;
                 net.threshold = self.threshold;
                 net.input_scale = self.input_scale;
-                self.loaded.insert(net)
+                net
             }
         };
-        MaskNetwork::mask(net, bgr)
+        Ok(self.loaded.insert(net))
+    }
+}
+
+impl MaskNetwork for LazyNetwork {
+    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
+        MaskNetwork::mask(self.load()?, bgr)
     }
 }
 
