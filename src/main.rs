@@ -93,6 +93,24 @@ enum Command {
         #[command(subcommand)]
         figure: cli::plot::PlotCommand,
     },
+    /// Run the bench: the cell's main settings (estimator, regrasp policy
+    /// and tolerance, tactile averaging) on the same seeded trials of
+    /// tasks/paper-regrasp-campaign.toml, each one's error against its
+    /// computation and cell time with the Pareto front marked, and the
+    /// latency of each stage of a trial. Run from the repository's root.
+    Bench {
+        /// Fewer trials (20 a setting instead of 100): about a minute in a
+        /// release build.
+        #[arg(long)]
+        quick: bool,
+        /// Print the tables as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Draw final |n| against the cell's time, the front joined, to
+        /// this file (PNG or SVG by its extension).
+        #[arg(long, value_name = "FILE")]
+        plot: Option<PathBuf>,
+    },
     /// Run a campaign: many seeded trials of a task, each policy of the file
     /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
     /// summarised side by side; or merge a sharded campaign's folders
@@ -342,6 +360,7 @@ fn main() -> ExitCode {
         Command::Graph { task } => cli::graph::graph(&task),
         Command::JsonSchema { output } => cli::json::json_schema(output),
         Command::Plot { figure } => cli::plot::plot(&figure),
+        Command::Bench { quick, json, plot } => cli::bench::bench(quick, json, plot.as_deref()),
         Command::Campaign {
             merge: Some(CampaignCommand::Merge { folders, out, json }),
             ..

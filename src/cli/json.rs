@@ -50,6 +50,8 @@ pub enum JsonOutput {
     Run,
     /// `campaign --json` and `campaign merge --json`: the summary.
     Campaign,
+    /// `bench --json`: stage latencies and each setting's error and cost.
+    Bench,
     /// `detect --json`: each image's cables.
     Detect,
     /// `eval-vision --json`: the scores against the labels.
@@ -69,6 +71,7 @@ impl JsonOutput {
         match self {
             Run => "cablecell run --json",
             Campaign => "cablecell campaign --json",
+            Bench => "cablecell bench --json",
             Detect => "cablecell detect --json",
             EvalVision => "cablecell eval-vision --json",
             EvalVisionSweep => "cablecell eval-vision --sweep --json",
@@ -98,6 +101,7 @@ impl JsonOutput {
         match self {
             Run => schema_for!(Versioned<cablecell::record::RunReport<'static>>),
             Campaign => schema_for!(Versioned<cablecell::campaign::summary::CampaignSummary>),
+            Bench => schema_for!(Versioned<super::bench::BenchReport>),
             Detect => schema_for!(Versioned<super::detect::DetectReport>),
             EvalVision => schema_for!(Versioned<super::eval_vision::Report>),
             EvalVisionSweep => schema_for!(Versioned<super::eval_vision::sweep::Sweep>),

@@ -1,6 +1,7 @@
 //! The subcommands, each in its own file; `Status` is the exit status
 //! they share.
 
+pub mod bench;
 pub mod calibrate_camera;
 pub mod campaign;
 pub mod check;

@@ -355,4 +355,7 @@ pub(super) fn print_outcome(record: &RunRecord) {
         }
         None => outln!("the run stopped before it ended"),
     }
+    for skip in &record.skipped {
+        outln!("skipped: {}: {}", skip.what, skip.why);
+    }
 }

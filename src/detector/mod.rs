@@ -15,6 +15,7 @@ use nalgebra::Isometry3;
 use crate::hw::DeviceError;
 use crate::hw::camera::{Camera, CameraImage};
 use crate::perception::shape::ShapePoint;
+use crate::perception::vision::VisionSkip;
 
 /// A cable found in the scene.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,6 +37,9 @@ pub struct Detections {
     /// Every cable in view, best first.
     pub cables: Vec<CableDetection>,
     pub image: Option<CameraImage>,
+    /// What the vision pipeline left out because the scene did not need
+    /// it (none for the oracle, which does not look).
+    pub skipped: Vec<VisionSkip>,
 }
 
 pub trait CableDetector: Send {

@@ -58,6 +58,7 @@ impl CableDetector for OracleDetector {
                 centre_line,
             }],
             image: None,
+            skipped: Vec::new(),
         })
     }
 }

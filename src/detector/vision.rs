@@ -79,6 +79,7 @@ impl CableDetector for VisionDetector {
         Ok(Detections {
             cables: found.into_iter().map(|(_, detection)| detection).collect(),
             image: Some(CameraImage(Arc::new(image))),
+            skipped: output.skipped,
         })
     }
 }

@@ -28,6 +28,7 @@ use statig::prelude::*;
 
 use super::command::{Command, Event};
 use super::plan::Plan;
+use crate::detector::Detections;
 use crate::geometry::{LineInSensor, planar_to_spatial, t_corr_with_gain};
 use crate::hw::gripper::GripOutcome;
 use crate::hw::tactile::TactileFrame;
@@ -35,8 +36,8 @@ use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::search::{Prior, SearchPose, covered_half_width_mm, search_poses};
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
 use crate::record::{
-    Failure, GraspRecord, RunOutcome, RunRecord, TouchOnlyRecord, TransitionRecord, Truth,
-    WhyTouchOnly,
+    Failure, GraspRecord, RunOutcome, RunRecord, Skip, Skipped, TouchOnlyRecord, TransitionRecord,
+    Truth, WhyTouchOnly,
 };
 
 /// What the machine shares with the runner: lent to the machine for each
@@ -152,16 +153,11 @@ impl GraspTask {
     #[state(superstate = "grasping", entry_action = "enter_detect")]
     fn detect(&mut self, context: &mut Context, event: &Event) -> Outcome<State> {
         match event {
-            Event::Detected(detections) => match (detections.cables.first(), context.plan.prior) {
-                (Some(detection), _) => {
-                    self.base_from_tcp_aim = aim_at(&context.plan, &detection.base_from_cable);
-                    Transition(State::approach())
-                }
-                (None, Some(prior)) => {
-                    self.start_search(context, prior, WhyTouchOnly::NoCableDetected)
-                }
-                (None, None) => fail(context, Failure::NothingDetected),
-            },
+            Event::Detected(detections) => {
+                let skipped = detections.skipped.iter().map(Skip::from);
+                context.record.skipped.extend(skipped);
+                self.on_detected(context, detections)
+            }
             Event::DeviceFault(error) if vision_unusable(error) => match context.plan.prior {
                 Some(prior) => {
                     let error = error.to_string();
@@ -373,6 +369,26 @@ fn standoff_from(base_from_tcp: &Isometry3<f64>, standoff_mm: f64) -> Isometry3<
 }
 
 impl GraspTask {
+    /// Approach the first cable detected (noting the search by touch it
+    /// spares, when the task has a prior); else search from the prior, or
+    /// fail without one.
+    fn on_detected(&mut self, context: &mut Context, detections: &Detections) -> Outcome<State> {
+        match (detections.cables.first(), context.plan.prior) {
+            (Some(detection), prior) => {
+                if prior.is_some() {
+                    context.record.skipped.push(Skip {
+                        what: Skipped::TouchSearch,
+                        why: "the camera placed the cable".to_owned(),
+                    });
+                }
+                self.base_from_tcp_aim = aim_at(&context.plan, &detection.base_from_cable);
+                Transition(State::approach())
+            }
+            (None, Some(prior)) => self.start_search(context, prior, WhyTouchOnly::NoCableDetected),
+            (None, None) => fail(context, Failure::NothingDetected),
+        }
+    }
+
     /// Starts a search by touch from `prior`: the trial grasp goes to its
     /// first pose, the prior's mean.
     fn start_search(
@@ -496,6 +512,20 @@ impl GraspTask {
         let line = fit.line();
         let error = line.error_to(&context.plan.target);
         if error.within(&context.plan.tolerance) {
+            let (max, tolerance) = (context.plan.max_regrasps, context.plan.tolerance);
+            if attempt < max {
+                context.record.skipped.push(Skip {
+                    what: Skipped::Regrasp,
+                    why: format!(
+                        "grasp {attempt} within tolerance (|n| {:.3} ≤ {} mm, |α| {:.4} ≤ {} rad): {} of {max} regrasp(s) unused",
+                        error.n_mm.abs(),
+                        tolerance.n_mm,
+                        error.alpha_rad.abs(),
+                        tolerance.alpha_rad,
+                        max - attempt
+                    ),
+                });
+            }
             context.record.outcome = Some(RunOutcome::Success { regrasps: attempt });
             Transition(State::done())
         } else if attempt < context.plan.max_regrasps {
@@ -773,6 +803,7 @@ mod tests {
             let moved = self.feed(Event::Detected(Detections {
                 cables: vec![detection],
                 image: None,
+                skipped: Vec::new(),
             }));
             assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
             self.feed(Event::Arrived).expect("grasp command")
@@ -940,6 +971,7 @@ mod tests {
         h.feed(Event::Detected(Detections {
             cables: Vec::new(),
             image: None,
+            skipped: Vec::new(),
         }));
         assert_eq!(h.state(), State::failed());
         assert!(matches!(
@@ -961,6 +993,7 @@ mod tests {
                 centre_line: Vec::new(),
             }],
             image: None,
+            skipped: Vec::new(),
         }));
         assert_eq!(h.state(), State::approach());
         let error = DeviceError::Timeout {
@@ -1052,6 +1085,7 @@ mod tests {
         let moved = h.feed(Event::Detected(Detections {
             cables: Vec::new(),
             image: None,
+            skipped: Vec::new(),
         }));
         assert!(matches!(moved, Some(Command::MoveTo { .. })), "{moved:?}");
         let Some(Command::Grasp { base_from_tcp, .. }) = h.feed(Event::Arrived) else {

@@ -10,6 +10,7 @@
 //! Debian's `fonts-dejavu-core`, which `scripts/setup` installs), so that
 //! neither fontconfig nor a system font service is needed.
 
+pub mod bench;
 pub mod campaign;
 pub mod fusion;
 pub mod regrasp;

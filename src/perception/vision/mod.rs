@@ -21,6 +21,6 @@ pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summa
 pub use mask::BackgroundStats;
 pub use pipeline::{
     CableInstance, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork, Pipeline, VisionConfig,
-    VisionOutput,
+    VisionOutput, VisionSkip,
 };
 pub use spline::BSpline;

@@ -73,6 +73,10 @@ pub struct FoundPaths {
     pub paths: Vec<CablePath>,
     /// The cables' typical width: mask area over skeleton length.
     pub width_px: f64,
+    /// Junctions whose branches were paired (crossings resolved), when
+    /// the method has such a stage (the skeleton's); 0 means the mask held
+    /// no crossing and the pairing had nothing to do.
+    pub junctions: Option<usize>,
 }
 
 /// Length along `points` (pixels, or whatever unit they are in).
@@ -413,6 +417,7 @@ pub(super) fn finish_paths(
     Ok(FoundPaths {
         paths: out,
         width_px,
+        junctions: None,
     })
 }
 

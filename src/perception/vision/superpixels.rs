@@ -239,6 +239,7 @@ pub fn paths_from_mask(
     let empty = FoundPaths {
         paths: Vec::new(),
         width_px,
+        junctions: None,
     };
     let bbox = imgproc::bounding_rect(mask).map_err(cv("mask extent"))?;
     if bbox.width <= 0 || bbox.height <= 0 || width_px.is_nan() || width_px <= 0.0 {

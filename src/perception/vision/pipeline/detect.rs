@@ -8,10 +8,10 @@ use std::time::Instant;
 use opencv::core::{self, Mat, Rect};
 use opencv::prelude::*;
 
-use super::config::InstanceMethod;
+use super::config::{InstanceMethod, MaskMethod};
 use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
-use super::output::{CableInstance, MaskInstances, VisionOutput};
+use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 use super::straight_edge::{EDGE_NOISE_SAGITTA_PX, looks_like_edge, straight_cable};
 use super::work_area::{ToImage, clip_roi, crop, to_work_size, work_scale};
 use super::{Pipeline, ms_since};
@@ -75,6 +75,27 @@ impl Pipeline {
         } else {
             None
         };
+        let mut skipped = Vec::new();
+        if self.config.mask == MaskMethod::Auto
+            && mask_used == MaskMethod::Classical
+            && background.plain
+        {
+            skipped.push(VisionSkip::Network {
+                near_fraction: background.near_fraction,
+            });
+        }
+        if found.junctions == Some(0) {
+            skipped.push(VisionSkip::CrossingResolution);
+        }
+        if roi != full {
+            let area = |r: Rect| f64::from(r.width) * f64::from(r.height);
+            skipped.push(VisionSkip::ImageOutsideRoi {
+                worked_fraction: area(roi) / area(full),
+            });
+        }
+        if !self.config.cable_masks {
+            skipped.push(VisionSkip::CableMasks);
+        }
         Ok(VisionOutput {
             cables: found.cables,
             mask_used,
@@ -85,6 +106,7 @@ impl Pipeline {
             work_scale: scale,
             timings_ms,
             notes,
+            skipped,
         })
     }
 
@@ -148,6 +170,7 @@ impl Pipeline {
             })
             .collect();
         let border_dropped = found.paths.len() - paths.len();
+        let junctions = found.junctions;
         timings_ms.push(("instances", ms_since(start)));
 
         let start = Instant::now();
@@ -216,6 +239,7 @@ impl Pipeline {
             straight_dropped,
             border_dropped,
             timings_ms,
+            junctions,
         })
     }
 }

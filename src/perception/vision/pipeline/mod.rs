@@ -23,7 +23,7 @@ use std::time::Instant;
 pub use config::{InstanceMethod, MaskMethod, VisionConfig};
 pub(crate) use draw::draw_paths;
 pub use mask_choice::MaskNetwork;
-pub use output::{CableInstance, MaskInstances, VisionOutput};
+pub use output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 pub use work_area::MAX_ENLARGEMENT;
 
 /// The vision pipeline, configured once and run per image.

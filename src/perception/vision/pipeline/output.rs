@@ -58,6 +58,53 @@ pub struct VisionOutput {
     /// What a user should know about this run (fallbacks taken,
     /// detections dropped as edges or as cables too little in view).
     pub notes: Vec<String>,
+    /// Work this run left out because the image did not need it.
+    pub skipped: Vec<VisionSkip>,
+}
+
+/// Work a run of the pipeline left out because the scene did not need
+/// it: said out loud so that a run's report shows where its time went and
+/// where it did not.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, JsonSchema)]
+#[serde(tag = "what", rename_all = "snake_case")]
+pub enum VisionSkip {
+    /// The background is plain and its classical mask not in doubt: the
+    /// segmentation network did not run.
+    Network {
+        /// The share of pixels near the background's colour.
+        near_fraction: f64,
+    },
+    /// The mask's skeleton has no junction: no crossing to resolve, so no
+    /// branches were paired.
+    CrossingResolution,
+    /// Only the region of interest was worked on.
+    ImageOutsideRoi {
+        /// The share of the image's pixels inside the region.
+        worked_fraction: f64,
+    },
+    /// The cables' masks were not drawn: grasp frames need only their
+    /// centre lines.
+    CableMasks,
+}
+
+impl VisionSkip {
+    /// Why the work was not needed, for a report.
+    pub fn why(&self) -> String {
+        match self {
+            VisionSkip::Network { near_fraction } => format!(
+                "plain background ({:.0} % of pixels near its colour) and the classical mask not in doubt",
+                100.0 * near_fraction
+            ),
+            VisionSkip::CrossingResolution => {
+                "no junction in the mask's skeleton: no cables cross".to_owned()
+            }
+            VisionSkip::ImageOutsideRoi { worked_fraction } => format!(
+                "a region of interest: {:.0} % of the image worked on",
+                100.0 * worked_fraction
+            ),
+            VisionSkip::CableMasks => "grasp frames need only the centre lines".to_owned(),
+        }
+    }
 }
 
 /// The instances found in a given mask (for testing the later stages on
@@ -75,4 +122,7 @@ pub struct MaskInstances {
     /// Milliseconds for "instances", "spline", and "instance_masks" when
     /// the cables' masks are drawn.
     pub timings_ms: Vec<(&'static str, f64)>,
+    /// Junctions whose branches were paired, when the instance method has
+    /// such a stage (see [`crate::perception::vision::paths::FoundPaths`]).
+    pub junctions: Option<usize>,
 }

@@ -67,6 +67,7 @@ pub fn paths_from_mask(
     let root = graph.merge_junctions(width_px);
     // Branches per merged junction, and their least-cost pairing (bending,
     // and colour when the image is given).
+    let junctions = pairing::junction_branches(&graph, &root).len();
     let partner = pairing::pair_branches(&graph, &root, image, width_px)?;
     let paths = walk::walk_paths(&graph, &partner, mask, width_px);
     // Superpixel walks have their own limit on turning, and their coarse
@@ -76,5 +77,9 @@ pub fn paths_from_mask(
         .into_iter()
         .flat_map(|path| cut_at_corners(path, span_px))
         .collect();
-    finish_paths(paths, mask, image, width_px, min_length_px)
+    let found = finish_paths(paths, mask, image, width_px, min_length_px)?;
+    Ok(FoundPaths {
+        junctions: Some(junctions),
+        ..found
+    })
 }

@@ -40,16 +40,9 @@ const COLOUR_FULL_DELTA_E: f64 = 40.0;
 /// is too costly and pairs are taken greedily, cheapest first.
 const MAX_EXACT_BRANCHES: usize = 8;
 
-/// Each junction branch's partner: at every merged junction (`root`
-/// gives each node's), its branches paired at least cost, by bending and,
-/// given the BGR `image` the mask was found in, by colour. Branches left
-/// unpaired have none: the cable ends there.
-pub(super) fn pair_branches(
-    graph: &Graph,
-    root: &[usize],
-    image: Option<&Mat>,
-    width_px: f64,
-) -> Result<HashMap<Branch, Branch>, VisionError> {
+/// The branches that meet at each merged junction (by its root): what
+/// [`pair_branches`] pairs; none when the mask holds no crossing.
+pub(super) fn junction_branches(graph: &Graph, root: &[usize]) -> HashMap<usize, Vec<Branch>> {
     let mut branches: HashMap<usize, Vec<Branch>> = HashMap::new();
     for (e, edge) in graph.edges.iter().enumerate() {
         if !edge.alive || edge.internal {
@@ -62,6 +55,20 @@ pub(super) fn pair_branches(
             }
         }
     }
+    branches
+}
+
+/// Each junction branch's partner: at every merged junction (`root`
+/// gives each node's), its branches paired at least cost, by bending and,
+/// given the BGR `image` the mask was found in, by colour. Branches left
+/// unpaired have none: the cable ends there.
+pub(super) fn pair_branches(
+    graph: &Graph,
+    root: &[usize],
+    image: Option<&Mat>,
+    width_px: f64,
+) -> Result<HashMap<Branch, Branch>, VisionError> {
+    let branches = junction_branches(graph, root);
     let mut partner: HashMap<Branch, Branch> = HashMap::new();
     let mut junctions: Vec<usize> = branches.keys().copied().collect();
     junctions.sort_unstable();
