@@ -44,6 +44,7 @@ pub fn bench(quick: bool, json: bool, plot: Option<&Path>) -> Status {
         seed: Some(size.seed),
         out: Some(PathBuf::from("unused")),
         no_record: true,
+        shard: None,
     };
     let campaign = match Campaign::load(Path::new(CAMPAIGN), overrides) {
         Ok(campaign) => campaign,
