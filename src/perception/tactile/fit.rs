@@ -193,7 +193,11 @@ impl Weights {
             // of a subnormal peak is infinite: then divide.
             let per_v = peak_v.recip();
             for w in w.iter_mut().flatten() {
-                *w = if per_v.is_finite() { *w * per_v } else { *w / peak_v };
+                *w = if per_v.is_finite() {
+                    *w * per_v
+                } else {
+                    *w / peak_v
+                };
             }
         }
         let saturated = map.saturated.iter().flatten().filter(|&&s| s).count();
