@@ -218,6 +218,49 @@ pub struct Axes<'f> {
     pub x_ticks: usize,
 }
 
+/// The pad's plane in the paper's sensor frame (Figs. 7, 9, 11): half a
+/// pitch beyond the pad on every side, the pad shaded; with the pad's and
+/// the view's half sides, mm, that lines are clipped to.
+pub struct PadChart<'a, DB: DrawingBackend> {
+    pub chart: Chart<'a, DB>,
+    pub pad_mm: f64,
+    pub view_mm: f64,
+}
+
+impl<'a, DB: DrawingBackend> PadChart<'a, DB> {
+    pub fn on(
+        area: &'a DrawingArea<DB, Shift>,
+        pitch_mm: f64,
+        label: &dyn Fn(&f64) -> String,
+    ) -> Result<Self, String> {
+        let pad_mm = crate::perception::tactile::PAD_HALF_SIDE_PITCH * pitch_mm;
+        let view_mm = pad_mm + 0.5 * pitch_mm;
+        let mut chart = chart(
+            area,
+            &Axes {
+                x: -view_mm..view_mm,
+                y: -view_mm..view_mm,
+                x_desc: "x in the sensor frame, towards c35 (mm)",
+                y_desc: "y, towards c13 (mm)",
+                x_label: label,
+                y_label: label,
+                x_ticks: 10,
+            },
+        )?;
+        chart
+            .draw_series([Rectangle::new(
+                [(-pad_mm, -pad_mm), (pad_mm, pad_mm)],
+                colour::REGION.filled(),
+            )])
+            .map_err(drawing_error)?;
+        Ok(Self {
+            chart,
+            pad_mm,
+            view_mm,
+        })
+    }
+}
+
 /// A tick label in whole millimetres (or any whole unit).
 pub fn whole(value: &f64) -> String {
     format!("{value:.0}")

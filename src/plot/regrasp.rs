@@ -4,15 +4,14 @@
 //! and the target pose the regrasps aim at with its tolerance.
 
 use plotters::coord::Shift;
-use plotters::prelude::{DashedLineSeries, DrawingArea, DrawingBackend, LineSeries, Rectangle};
+use plotters::prelude::{DashedLineSeries, DrawingArea, DrawingBackend, LineSeries};
 use plotters::style::Color;
 
 use super::{
-    Axes, Figure, LegendEntry, PlotError, Sample, chart, colour, draw_legend, drawing_error,
+    Figure, LegendEntry, PadChart, PlotError, Sample, colour, draw_legend, drawing_error,
     line_in_square, titled_square, whole,
 };
 use crate::geometry::{LineInSensor, PoseError};
-use crate::perception::tactile::PAD_HALF_SIDE_PITCH;
 
 /// Width of each grasp's fitted line, pixels; its true line is thinner
 /// and dashed.
@@ -82,26 +81,11 @@ fn line_text(line: &LineInSensor) -> String {
 impl Figure for RegraspFigure {
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
         let (chart_area, legend_area) = titled_square(area, &self.title)?;
-        let pad_mm = PAD_HALF_SIDE_PITCH * self.pitch_mm;
-        let view_mm = pad_mm + 0.5 * self.pitch_mm;
-        let mut chart = chart(
-            &chart_area,
-            &Axes {
-                x: -view_mm..view_mm,
-                y: -view_mm..view_mm,
-                x_desc: "x in the sensor frame, towards c35 (mm)",
-                y_desc: "y, towards c13 (mm)",
-                x_label: &whole,
-                y_label: &whole,
-                x_ticks: 10,
-            },
-        )?;
-        chart
-            .draw_series([Rectangle::new(
-                [(-pad_mm, -pad_mm), (pad_mm, pad_mm)],
-                colour::REGION.filled(),
-            )])
-            .map_err(drawing_error)?;
+        let PadChart {
+            mut chart,
+            pad_mm,
+            view_mm,
+        } = PadChart::on(&chart_area, self.pitch_mm, &whole)?;
         let mut legend = vec![LegendEntry::new(
             Sample::Line {
                 colour: colour::TARGET,

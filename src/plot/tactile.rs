@@ -4,18 +4,17 @@
 //! simulated cell also the true cable, the paper's Fig. 9 comparison.
 
 use plotters::coord::Shift;
-use plotters::prelude::{Circle, DrawingArea, DrawingBackend, LineSeries, Rectangle};
+use plotters::prelude::{Circle, DrawingArea, DrawingBackend, LineSeries};
 use plotters::style::Color;
 
 use super::{
-    Axes, Figure, LegendEntry, PlotError, Sample, chart, colour, draw_legend, drawing_error,
+    Figure, LegendEntry, PadChart, PlotError, Sample, colour, draw_legend, drawing_error,
     line_in_square, titled_square, whole,
 };
 use crate::geometry::LineInSensor;
 use crate::perception::tactile::map::{taxel_x_mm, taxel_y_mm};
 use crate::perception::tactile::{
-    Direction, FitConfig, FitError, PAD_HALF_SIDE_PITCH, TAXEL_COLS, TAXEL_ROWS, TactileMap,
-    WireFit, fit_wire,
+    Direction, FitConfig, FitError, TAXEL_COLS, TAXEL_ROWS, TactileMap, WireFit, fit_wire,
 };
 
 /// Width of the true cable's line, pixels: under the fits, visible around
@@ -156,8 +155,6 @@ impl Figure for TactileFigure {
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
         let (chart_area, legend_area) = titled_square(area, &self.title)?;
         let pitch = self.pitch_mm;
-        let pad_mm = PAD_HALF_SIDE_PITCH * pitch;
-        let view_mm = pad_mm + 0.5 * pitch;
         let decimals = |v: &f64| {
             if pitch >= 2.0 {
                 whole(v)
@@ -165,24 +162,11 @@ impl Figure for TactileFigure {
                 format!("{v:.1}")
             }
         };
-        let mut chart = chart(
-            &chart_area,
-            &Axes {
-                x: -view_mm..view_mm,
-                y: -view_mm..view_mm,
-                x_desc: "x in the sensor frame, towards c35 (mm)",
-                y_desc: "y, towards c13 (mm)",
-                x_label: &decimals,
-                y_label: &decimals,
-                x_ticks: 10,
-            },
-        )?;
-        chart
-            .draw_series([Rectangle::new(
-                [(-pad_mm, -pad_mm), (pad_mm, pad_mm)],
-                colour::REGION.filled(),
-            )])
-            .map_err(drawing_error)?;
+        let PadChart {
+            mut chart,
+            pad_mm,
+            view_mm,
+        } = PadChart::on(&chart_area, pitch, &decimals)?;
         if let Some(ends) = self.truth.and_then(|t| line_in_square(&t, view_mm)) {
             chart
                 .draw_series(LineSeries::new(

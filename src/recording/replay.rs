@@ -6,7 +6,7 @@ use super::RecordingError;
 use super::read::Recording;
 use super::schema::{RunMessage, TactileFitMessage, TactileRawMessage, Topic, TransitionMessage};
 use crate::geometry::{LineInSensor, PoseError};
-use crate::perception::tactile::{BiasEstimator, Estimator, FitConfig, FitError, RawFrame};
+use crate::perception::tactile::{BiasEstimator, Estimator, FitError, RawFrame};
 
 /// What a recording says happened.
 #[derive(Debug, Clone)]
@@ -96,14 +96,8 @@ impl Replay {
                     .chain(&self.changes)
                     .rfind(|run| run.timestamp <= judged)
                     .unwrap_or(&self.run);
-                let config = FitConfig {
-                    pitch_mm: plan.pitch_mm,
-                    contact_threshold_v: plan.contact_threshold_v,
-                };
-                let truth = fit
-                    .true_n_mm
-                    .zip(fit.true_alpha_rad)
-                    .map(|(n_mm, alpha_rad)| LineInSensor::new(alpha_rad, n_mm));
+                let config = plan.fit_config();
+                let truth = fit.truth();
                 Some(Refit {
                     attempt: fit.attempt,
                     estimator,

@@ -15,7 +15,7 @@ use foxglove::Encode;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{LineInSensor, PoseError};
-use crate::perception::tactile::{Estimator, TAXEL_COUNT};
+use crate::perception::tactile::{Estimator, FitConfig, TAXEL_COUNT};
 use crate::record::GraspShapes;
 
 /// Every channel a recording may hold.
@@ -227,6 +227,16 @@ pub struct RunMessage {
     pub bias_frames: usize,
 }
 
+impl RunMessage {
+    /// The paper's fit as this plan configured it.
+    pub fn fit_config(&self) -> FitConfig {
+        FitConfig {
+            pitch_mm: self.pitch_mm,
+            contact_threshold_v: self.contact_threshold_v,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TransitionMessage {
     pub timestamp: Timestamp,
@@ -283,6 +293,22 @@ pub struct TactileFitMessage {
     pub true_alpha_rad: Option<f64>,
     /// The paper's centroids (x, y in mm), when that estimator ran.
     pub centroids_mm: Vec<[f64; 2]>,
+}
+
+impl TactileFitMessage {
+    /// The estimated line; `None` if the fit failed.
+    pub fn estimate(&self) -> Option<LineInSensor> {
+        self.alpha_rad
+            .zip(self.n_mm)
+            .map(|(a, n)| LineInSensor::new(a, n))
+    }
+
+    /// Where the cable really lay (simulated cells).
+    pub fn truth(&self) -> Option<LineInSensor> {
+        self.true_alpha_rad
+            .zip(self.true_n_mm)
+            .map(|(a, n)| LineInSensor::new(a, n))
+    }
 }
 
 /// A grasp's shapes of the cable (see [`GraspShapes`]), points in mm in

@@ -7,7 +7,6 @@ mod campaign;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use cablecell::geometry::LineInSensor;
 use cablecell::perception::tactile::{FitConfig, TactileMap};
 use cablecell::plot::fusion::FusionFigure;
 use cablecell::plot::regrasp::{GraspLines, RegraspFigure, grasp_name};
@@ -201,14 +200,8 @@ fn tactile(input: &Path, grasp: Option<u32>, out: Option<&Path>) -> Result<PathB
         };
         let map = TactileMap::from_row_major(&fit.map_dv_v)
             .map_err(|e| Failure::BadInput(format!("{}: {e}", input.display())))?;
-        let config = FitConfig {
-            pitch_mm: run.pitch_mm,
-            contact_threshold_v: run.contact_threshold_v,
-        };
-        let truth = fit
-            .true_alpha_rad
-            .zip(fit.true_n_mm)
-            .map(|(alpha_rad, n_mm)| LineInSensor::new(alpha_rad, n_mm));
+        let config = run.fit_config();
+        let truth = fit.truth();
         let title = format!(
             "Tactile map at the {}{}",
             grasp_name(attempt),
@@ -251,14 +244,8 @@ fn regrasp(path: &Path, out: Option<&Path>) -> Result<PathBuf, Failure> {
         .iter()
         .map(|m| GraspLines {
             attempt: m.attempt,
-            estimate: m
-                .alpha_rad
-                .zip(m.n_mm)
-                .map(|(alpha_rad, n_mm)| LineInSensor::new(alpha_rad, n_mm)),
-            truth: m
-                .true_alpha_rad
-                .zip(m.true_n_mm)
-                .map(|(alpha_rad, n_mm)| LineInSensor::new(alpha_rad, n_mm)),
+            estimate: m.estimate(),
+            truth: m.truth(),
         })
         .collect();
     let title = format!("The cable on the pad, grasp by grasp{}", run_text(&run));
