@@ -52,16 +52,29 @@ impl LineInSensor {
     /// The line through `point_mm` along `direction` (need not be unit,
     /// must not be zero).
     pub fn through(point_mm: Vector2<f64>, direction: Vector2<f64>) -> Self {
-        let alpha = direction.y.atan2(direction.x);
-        let normal = Vector2::new(-alpha.sin(), alpha.cos());
-        Self::new(alpha, normal.dot(&point_mm))
+        // Turned to point into x > 0 (or along +y), the direction's angle
+        // already lies in (-π/2, π/2] and its normal is the direction
+        // rotated by a quarter turn: one atan2 and one square root, no
+        // sine or cosine (this is on every tactile frame's path).
+        let flip = direction.x < 0.0 || (direction.x == 0.0 && direction.y < 0.0);
+        let d = if flip { -direction } else { direction };
+        let length = d.norm();
+        if !(length > 0.0 && length.is_finite()) {
+            // No direction (or an infinite one): the angle atan2 gives it.
+            let alpha = direction.y.atan2(direction.x);
+            let normal = Vector2::new(-alpha.sin(), alpha.cos());
+            return Self::new(alpha, normal.dot(&point_mm));
+        }
+        let normal = Vector2::new(-d.y, d.x) / length;
+        // `new` still wraps an angle that rounded to -π/2 exactly.
+        Self::new(d.y.atan2(d.x), normal.dot(&point_mm))
     }
 
     /// The paper's slope and intercept `(m, n)` of `y = m x + n`; `None`
     /// for a line too close to the y-axis to have them.
     pub fn slope_intercept(&self) -> Option<(f64, f64)> {
-        let cos = self.alpha_rad.cos();
-        (cos.abs() > 1e-9).then(|| (self.alpha_rad.tan(), self.n_mm / cos))
+        let (sin, cos) = self.alpha_rad.sin_cos();
+        (cos.abs() > 1e-9).then(|| (sin / cos, self.n_mm / cos))
     }
 
     /// Unit normal (-sin α, cos α) along which `offset_mm` is measured.

@@ -27,6 +27,7 @@
 
 use std::fmt;
 
+use arrayvec::ArrayVec;
 use nalgebra::Vector2;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -115,7 +116,8 @@ pub struct WireFit {
     pub h_v: f64,
     /// The paper's v: the smallest row sum of (clamped) Δv.
     pub v_v: f64,
-    pub centroids: Vec<Centroid>,
+    /// One per column (row) that carries the cable.
+    pub centroids: ArrayVec<Centroid, LINES>,
     /// Least-squares line through the centroids (eq. 2).
     pub line: LineInSensor,
     /// The paper's m of eq. 2; `None` for a cable along y.
@@ -302,7 +304,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         t: [0.0; LINES],
         len: 0,
     };
-    let mut centroids = Vec::with_capacity(LINES);
+    let mut centroids = ArrayVec::new();
     for k in 0..LINES {
         let (sum, moment, u) = match direction {
             Direction::Horizontal => {
@@ -338,8 +340,12 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         });
     }
 
-    let Fits { line, quadratic } = Fits::of(&samples, direction, pitch_mm);
-    let (slope_m, intercept_n_mm) = line.slope_intercept().unzip();
+    let Fits {
+        line,
+        slope_intercept,
+        quadratic,
+    } = Fits::of(&samples, direction, pitch_mm);
+    let (slope_m, intercept_n_mm) = slope_intercept.unzip();
     Ok(WireFit {
         direction,
         h_v: weights.volts(h),
@@ -369,6 +375,9 @@ fn carries_contact(sum: f64, threshold: f64) -> bool {
 /// data, whatever the pitch. The line needs 2 distinct u, the parabola 3.
 struct Fits {
     line: LineInSensor,
+    /// The paper's m and n of eq. 2; `None` for a line within 1e-9 rad of
+    /// the y-axis, as [`LineInSensor::slope_intercept`] says.
+    slope_intercept: Option<(f64, f64)>,
     /// `None` with fewer than 3 samples.
     quadratic: Option<Quadratic>,
 }
@@ -394,9 +403,19 @@ impl Fits {
             Direction::Vertical => (Vector2::new(t_mean, u_mean), Vector2::new(slope, 1.0)),
         };
         let line = LineInSensor::through(point * pitch_mm, dir);
+        // The regression's own intercept, with no trigonometry: along x,
+        // t = slope u + t0; along y, x = slope y + x0, so y = x / slope -
+        // x0 / slope, where |cos α| = |slope| / √(1 + slope²).
+        let t0_mm = (t_mean - slope * u_mean) * pitch_mm;
+        let slope_intercept = match direction {
+            Direction::Horizontal => Some((slope, t0_mm)),
+            Direction::Vertical => (slope.abs() > 1e-9 * (1.0 + slope * slope).sqrt())
+                .then(|| (slope.recip(), -t0_mm / slope)),
+        };
         if samples.len < 3 {
             return Self {
                 line,
+                slope_intercept,
                 quadratic: None,
             };
         }
@@ -417,6 +436,7 @@ impl Fits {
         // T = (a/p) U² + (b - 2aū) U + p (aū² - bū + c).
         Self {
             line,
+            slope_intercept,
             quadratic: Some(Quadratic {
                 a: a / pitch_mm,
                 b: b - 2.0 * a * u_mean,
