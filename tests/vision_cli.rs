@@ -315,6 +315,7 @@ fn eval_vision_with_a_model_that_is_no_network_is_bad_input() {
     assert!(stderr.contains("/no/such/model.onnx"), "{stderr}");
 }
 
+/// The network and its runtime are found where the set-up put them from
 /// any working directory, with nothing in the environment pointing there.
 #[test]
 fn detect_finds_the_network_from_any_working_directory() {
