@@ -189,9 +189,9 @@ pub fn run_settings(
     rows
 }
 
+/// The campaign statistics' mean of `values`; `None` for none.
 fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
-    let (sum, count) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
-    (count > 0).then(|| sum / count as f64)
+    Summary::of(&values.collect::<Vec<_>>()).map(|s| s.mean)
 }
 
 fn row(setting: &Setting, entries: &[TrialEntry]) -> SettingRow {
