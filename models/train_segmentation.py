@@ -191,6 +191,57 @@ def recolour_background(rng: np.random.Generator, img: np.ndarray, mask: np.ndar
     return (cable * img + (1 - cable) * tinted).round().astype(np.uint8)
 
 
+def load_cutouts(data: Path, ids: list[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every labelled cable of the given photographs, cut out along its own
+    mask (`NNNNN_mask_K.png`) at the network's size: (BGR patch, mask
+    patch 0..1). Pasted over rendered backgrounds they give real cables,
+    their colours, sheen and ends, on scenes no photograph shows."""
+    cutouts = []
+    for i in ids:
+        img = cv2.imread(str(data / f"{i:05d}.jpg"), cv2.IMREAD_COLOR)
+        if img is None:
+            raise FileNotFoundError(f"{data}: image {i:05d} missing")
+        img = cv2.resize(img, (NET_W, NET_H), interpolation=cv2.INTER_AREA)
+        for path in sorted(data.glob(f"{i:05d}_mask_[0-9]*.png")):
+            m = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+            m = cv2.resize((m > 127).astype(np.float32), (NET_W, NET_H), interpolation=cv2.INTER_AREA)
+            ys, xs = np.nonzero(m > 0.5)
+            if len(xs) < 30:
+                continue
+            x0, x1, y0, y1 = xs.min(), xs.max() + 1, ys.min(), ys.max() + 1
+            cutouts.append((img[y0:y1, x0:x1].copy(), m[y0:y1, x0:x1].copy()))
+    return cutouts
+
+
+def paste_cables(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray,
+                 cutouts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """`img` with one to four real cables pasted over it, each scaled (the
+    paper's cables are up to 2.5 times as thick as cables-dev's), rotated,
+    shaded and blurred like the scene, its mask added to the labels."""
+    h, w = mask.shape
+    img = img.astype(np.float32)
+    mask = mask.copy()
+    for _ in range(rng.integers(1, 5)):
+        patch, pm = cutouts[rng.integers(0, len(cutouts))]
+        s = rng.uniform(1.0, 2.6)
+        a = rng.uniform(-180, 180)
+        ph, pw = pm.shape
+        mtx = cv2.getRotationMatrix2D((pw / 2, ph / 2), a, s)
+        mtx[:, 2] += (rng.uniform(0, w) - pw / 2, rng.uniform(0, h) - ph / 2)
+        warped = cv2.warpAffine(patch, mtx, (w, h), flags=cv2.INTER_LINEAR).astype(np.float32)
+        alpha = cv2.warpAffine(pm, mtx, (w, h), flags=cv2.INTER_LINEAR)
+        if rng.random() < 0.5:
+            k = rng.choice([3, 5])
+            warped = cv2.GaussianBlur(warped, (k, k), 0)
+        warped = warped * rng.uniform(0.7, 1.3) + rng.uniform(-20, 20)
+        if rng.random() < 0.3:
+            warped = warped[..., rng.permutation(3)]
+        a3 = np.clip(alpha, 0, 1)[..., None]
+        img = a3 * warped + (1 - a3) * img
+        mask = np.maximum(mask, alpha)
+    return np.clip(img, 0, 255).round().astype(np.uint8), mask
+
+
 def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int) -> tuple[np.ndarray, np.ndarray]:
     """A random crop x crop window of a randomly flipped, scaled, rotated and
     recoloured image, with its mask warped alike."""
@@ -241,19 +292,26 @@ def loss_fn(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return bce + dice.mean()
 
 
-def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, crop: int, real_fraction: float,
-               recolour_fraction: float):
+def make_batch(rng, real, synth, busy, cutouts, args):
+    """A batch: real photographs (`--real-fraction`), busy rendered scenes
+    (`--busy-fraction`, real cables pasted over `--paste-fraction` of
+    them) and the other rendered scenes."""
     xs, ys = [], []
-    for _ in range(batch):
-        if rng.random() < real_fraction:
-            j = rng.integers(0, len(real_imgs))
-            img, m = real_imgs[j], real_masks[j]
+    for _ in range(args.batch):
+        u = rng.random()
+        if u < args.real_fraction:
+            source = real
+        elif busy is not None and u < args.real_fraction + args.busy_fraction:
+            source = busy
         else:
-            j = rng.integers(0, len(synth_imgs))
-            img, m = synth_imgs[j], synth_masks[j]
-            if recolour_fraction > 0 and rng.random() < recolour_fraction:
-                img = recolour_background(rng, img, m)
-        img, m = augment(rng, img, m, crop)
+            source = synth
+        j = rng.integers(0, len(source[0]))
+        img, m = source[0][j], source[1][j]
+        if source is busy and cutouts and rng.random() < args.paste_fraction:
+            img, m = paste_cables(rng, img, m, cutouts)
+        if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
+            img = recolour_background(rng, img, m)
+        img, m = augment(rng, img, m, args.crop)
         xs.append(img)
         ys.append(m)
     x = torch.from_numpy(np.stack(xs)).permute(0, 3, 1, 2).contiguous(memory_format=torch.channels_last)
@@ -262,24 +320,94 @@ def make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, batch: int, 
     return x, y
 
 
+def load_onnx_weights(model: CableNet, path: Path) -> None:
+    """Starts `model` from an exported float model's weights, to fine-tune
+    it on new data rather than train from nothing. The export folds each
+    batch norm into its convolution, so the convolutions take the folded
+    weights and biases (given as the batch norms' shifts) and the batch
+    norms become identities, to be kept frozen (`freeze_batch_norms`).
+    ONNX's Conv nodes come in the order the forward pass runs them."""
+    import onnx
+    from onnx import numpy_helper
+
+    graph = onnx.load(str(path)).graph
+    weights = {i.name: numpy_helper.to_array(i) for i in graph.initializer}
+    order: list[nn.Conv2d] = []
+    hooks = [m.register_forward_hook(lambda m, i, o: order.append(m)) for m in model.modules()
+             if isinstance(m, nn.Conv2d)]
+    model.eval()
+    with torch.no_grad():
+        model.logits(torch.zeros(1, 3, 32, 32))
+    for h in hooks:
+        h.remove()
+    convs = [n for n in graph.node if n.op_type == "Conv"]
+    if len(convs) != len(order):
+        raise ValueError(f"{path}: {len(convs)} convolutions, the network has {len(order)}")
+    batch_norm_after = {seq[0]: seq[1] for seq in model.modules()
+                        if isinstance(seq, ConvBnAct)}
+    with torch.no_grad():
+        for node, conv in zip(convs, order):
+            w = torch.from_numpy(weights[node.input[1]].copy())
+            b = torch.from_numpy(weights[node.input[2]].copy()) if len(node.input) > 2 else None
+            if w.shape != conv.weight.shape:
+                raise ValueError(f"{path}: convolution {node.name} is {tuple(w.shape)}, "
+                                 f"the network's {tuple(conv.weight.shape)}")
+            conv.weight.copy_(w)
+            bn = batch_norm_after.get(conv)
+            if bn is not None:
+                bn.running_mean.zero_()
+                bn.running_var.fill_(1.0 - bn.eps)
+                bn.weight.fill_(1.0)
+                bn.bias.copy_(b)
+            elif b is not None:
+                conv.bias.copy_(b)
+
+
+def freeze_batch_norms(model: CableNet) -> None:
+    """Batch norms in evaluation mode: they keep the folded weights'
+    statistics while the rest trains."""
+    for m in model.modules():
+        if isinstance(m, nn.BatchNorm2d):
+            m.eval()
+
+
 def train(args) -> CableNet:
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
-    real_imgs, real_masks = load_real(args.data, TRAIN_IDS, (NET_W, NET_H))
-    synth_imgs, synth_masks = load_synthetic(args.synthetic, args.synthetic_count)
-    print(f"data: {len(real_imgs)} real, {len(synth_imgs)} synthetic in {time.time() - t0:.1f} s", flush=True)
+    real = load_real(args.data, TRAIN_IDS, (NET_W, NET_H))
+    synth = load_synthetic(args.synthetic, args.synthetic_count)
+    busy = load_synthetic(args.busy, args.synthetic_count) if args.busy else None
+    cutouts = load_cutouts(args.data, TRAIN_IDS) if busy is not None else []
+    print(f"data: {len(real[0])} real, {len(synth[0])} synthetic, {len(busy[0]) if busy else 0} busy, "
+          f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
 
-    model = CableNet().to(memory_format=torch.channels_last)
+    model = CableNet()
+    if args.init is not None:
+        load_onnx_weights(model, args.init)
+        print(f"starting from {args.init}'s weights", flush=True)
+    model = model.to(memory_format=torch.channels_last)
     n_params = sum(p.numel() for p in model.parameters())
     print(f"model: {n_params} parameters", flush=True)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=args.steps, pct_start=0.1)
+    checkpoint = args.out.with_name(f"{args.out.stem}.checkpoint.pt")
+    first = 1
+    if args.resume and checkpoint.exists():
+        state = torch.load(checkpoint, weights_only=False)
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["opt"])
+        sched.load_state_dict(state["sched"])
+        rng.bit_generator.state = state["rng"]
+        torch.set_rng_state(state["torch_rng"])
+        first = state["step"] + 1
+        print(f"resumed from {checkpoint} at step {first}", flush=True)
     model.train()
+    if args.init is not None:
+        freeze_batch_norms(model)
     t_train = time.time()
     running = 0.0
-    for step in range(1, args.steps + 1):
-        x, y = make_batch(rng, real_imgs, real_masks, synth_imgs, synth_masks, args.batch, args.crop, args.real_fraction,
-                          args.recolour_fraction)
+    for step in range(first, args.steps + 1):
+        x, y = make_batch(rng, real, synth, busy, cutouts, args)
         loss = loss_fn(model.logits(x), y)
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -288,7 +416,12 @@ def train(args) -> CableNet:
         running = 0.95 * running + 0.05 * loss.item() if step > 1 else loss.item()
         if step % 50 == 0 or step == args.steps:
             el = time.time() - t_train
-            print(f"step {step}/{args.steps} loss {running:.4f} {el:.0f} s ({el / step:.2f} s/step)", flush=True)
+            print(f"step {step}/{args.steps} loss {running:.4f} {el:.0f} s ({el / (step - first + 1):.2f} s/step)",
+                  flush=True)
+        if step % args.checkpoint_every == 0 or step == args.steps:
+            torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
+                        "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "step": step},
+                       checkpoint)
     model.eval()
     print(f"training took {time.time() - t_train:.0f} s", flush=True)
     return model.to(memory_format=torch.contiguous_format)
@@ -390,6 +523,18 @@ def main() -> int:
     parser.add_argument("--synthetic", type=Path, help="a folder written by `cablecell render-dataset` (required to train)")
     parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
+    parser.add_argument("--busy", type=Path,
+                        help="a folder written by `cablecell render-dataset --backgrounds busy`: the paper's kind "
+                             "of scene, with the training photographs' cables pasted over it")
+    parser.add_argument("--busy-fraction", type=float, default=0.3, help="share of busy rendered images in a batch")
+    parser.add_argument("--paste-fraction", type=float, default=0.5,
+                        help="share of busy images that get real cables pasted over them")
+    parser.add_argument("--checkpoint-every", type=int, default=200,
+                        help="steps between checkpoints (OUT_STEM.checkpoint.pt beside the model)")
+    parser.add_argument("--init", type=Path,
+                        help="fine-tune this float ONNX model (e.g. models/cable_segmentation_float.onnx) "
+                             "instead of training from nothing")
+    parser.add_argument("--resume", action="store_true", help="go on from the checkpoint, if there is one")
     parser.add_argument("--recolour-fraction", type=float, default=0.0,
                         help="share of rendered images whose background is given a strong hue "
                              "(recolour_background; not used for the shipped model, see models/README.md)")

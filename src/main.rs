@@ -70,10 +70,15 @@ enum Command {
         #[arg(long, value_delimiter = ',', value_parser = parse_estimator)]
         estimator: Vec<cablecell::perception::tactile::Estimator>,
         /// Run the vision pipeline again on the recorded camera images (with
-        /// the pipeline's options below), to compare settings on the same
-        /// inputs.
+        /// the pipeline's options below, or the cell's with --cell), to
+        /// compare settings on the same inputs.
         #[arg(long)]
         vision: bool,
+        /// With --vision: the cell file the run used; its detector's own
+        /// settings replace the options below, so the cables are those the
+        /// task's detect state found.
+        #[arg(long, requires = "vision")]
+        cell: Option<PathBuf>,
         #[command(flatten)]
         vision_args: cli::vision_io::VisionArgs,
     },
@@ -159,11 +164,14 @@ enum Command {
         images: Vec<PathBuf>,
         #[command(flatten)]
         vision: cli::vision_io::VisionArgs,
-        /// A cell file whose calibrated camera took the images: each grasp
-        /// frame is also given in the robot's base frame.
+        /// A cell file whose calibrated camera took the images: the cell's
+        /// own vision settings (region of interest, network, its scale,
+        /// straight edges) replace the options above, so that the cables
+        /// are those the task's detect state finds, and each grasp frame is
+        /// also given in the robot's base frame.
         #[arg(long)]
         cell: Option<PathBuf>,
-        /// Print one JSON array of reports.
+        /// Print one JSON object of reports.
         #[arg(long)]
         json: bool,
         /// Write each cable's mask (NAME_mask_K.png) and their union
@@ -355,8 +363,14 @@ fn main() -> ExitCode {
             file,
             estimator,
             vision,
+            cell,
             vision_args,
-        } => cli::replay::replay(&file, &estimator, vision.then_some(&vision_args)),
+        } => cli::replay::replay(
+            &file,
+            &estimator,
+            vision.then_some(&vision_args),
+            cell.as_deref(),
+        ),
         Command::Graph { task } => cli::graph::graph(&task),
         Command::JsonSchema { output } => cli::json::json_schema(output),
         Command::Plot { figure } => cli::plot::plot(&figure),

@@ -26,6 +26,9 @@ pub struct RunRecord {
     pub outcome: Option<RunOutcome>,
     /// Devices that could not be made safe after a fault.
     pub safe_stop_problems: Vec<String>,
+    /// Every cable the detector reported, best (most confident) first:
+    /// the task grasps the first.
+    pub detected: Vec<DetectedCable>,
     /// How the cable was found without the camera; `None` (and left out
     /// of the JSON) when the detector placed it.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -53,6 +56,7 @@ impl RunRecord {
             grasps: Vec::new(),
             outcome: None,
             safe_stop_problems: Vec::new(),
+            detected: Vec::new(),
             touch_only: None,
             skipped: Vec::new(),
         }
@@ -196,6 +200,17 @@ pub struct StateTiming {
     pub state: &'static str,
     pub entered_s: f64,
     pub duration_s: Option<f64>,
+}
+
+/// A cable the detector reported.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct DetectedCable {
+    /// How much it looks like a cable, 0 to 1 (1 from the oracle).
+    pub confidence: f64,
+    /// Its grasp frame at s = 0.5.
+    #[serde(with = "pose_mm")]
+    #[schemars(with = "PoseMm")]
+    pub base_from_cable: Isometry3<f64>,
 }
 
 /// One grasp and what the pad said of it.

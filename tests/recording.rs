@@ -346,19 +346,15 @@ fn a_plan_changed_mid_run_is_recorded_with_the_grasps_it_judged() {
 fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("vision.mcap");
-    let output = common::cablecell(&[
+    let run = common::json_of(&[
         "run",
         "tasks/regrasp.toml",
         "--seed",
         "2",
+        "--json",
         "--record",
         path.to_str().unwrap(),
     ]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
     let recording = Recording::read(&path).unwrap();
     assert_eq!(recording.count(Topic::CameraImage), 1);
     let images: Vec<cablecell::recording::schema::CompressedImageMessage> =
@@ -366,6 +362,7 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     assert_eq!(images[0].format, "png");
     assert!(images[0].data.starts_with(b"\x89PNG"));
 
+    // The command line's settings see the whole image.
     let output = common::cablecell(&[
         "replay",
         path.to_str().unwrap(),
@@ -376,9 +373,56 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     let text = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success(), "{text}");
     assert!(
-        text.contains("vision again on the recorded images (1):"),
+        text.contains("vision again on the recorded images (1), with the options given:"),
         "{text}"
     );
+    assert!(text.contains("start-up: "), "{text}");
     assert!(text.contains("Network mask"), "{text}");
     assert!(text.contains("cable 0: grasp at ("), "{text}");
+
+    // The cell's own settings (its region of interest, network scale and
+    // straight edges kept) see what the task's detect state saw: its one
+    // cable, not the finger's marker as a second.
+    let detected = run["detected"].as_array().expect("the run's detections");
+    assert_eq!(detected.len(), 1, "{run}");
+    let output = common::cablecell(&[
+        "replay",
+        path.to_str().unwrap(),
+        "--vision",
+        "--cell",
+        "config/cell.sim.toml",
+    ]);
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{text}");
+    assert!(text.contains("config/cell.sim.toml's detector"), "{text}");
+    assert!(text.contains(" 1 cable(s), Network mask"), "{text}");
+
+    let image = dir.path().join("camera.png");
+    std::fs::write(&image, &images[0].data).unwrap();
+    let report = common::json_of(&[
+        "detect",
+        image.to_str().unwrap(),
+        "--cell",
+        "config/cell.sim.toml",
+        "--json",
+    ]);
+    let found = &report["images"][0];
+    assert_eq!(found["cables"].as_array().unwrap().len(), 1, "{report}");
+    let confidence = found["cables"][0]["confidence"].as_f64().unwrap();
+    assert!(
+        (confidence - detected[0]["confidence"].as_f64().unwrap()).abs() < 1e-9,
+        "{report}"
+    );
+    let at = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let by_detect = at(&found["grasp_frames_in_base"][0]["translation_mm"]);
+    let by_task = at(&detected[0]["base_from_cable"]["translation_mm"]);
+    for (a, b) in by_detect.iter().zip(&by_task) {
+        assert!((a - b).abs() < 1e-6, "{by_detect:?} against {by_task:?}");
+    }
 }

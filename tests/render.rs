@@ -10,8 +10,8 @@ use cablecell::perception::vision::calibration::{
 };
 use cablecell::perception::vision::paths::polyline_length;
 use cablecell::sim::render::{
-    Appearance, Background, CableSpec, Light, RenderedScene, SceneOptions, SceneSpec, random_scene,
-    render, render_world, write_dataset,
+    Appearance, Background, BackgroundChoice, CableSpec, Light, RenderedScene, SceneOptions,
+    SceneSpec, random_scene, render, render_world, write_dataset,
 };
 use cablecell::sim::world::SimWorld;
 use cablecell::sim::world::WorldConfig;
@@ -81,7 +81,59 @@ fn straight(from: [f64; 2], to: [f64; 2], diameter_px: f64, bgr: [u8; 3]) -> Cab
         diameter_px,
         bgr,
         gloss: 0.3,
+        metal_end_px: 0.0,
     }
+}
+
+#[test]
+fn a_cables_metal_ends_are_silver_and_in_its_mask() {
+    let mut cable = straight([100.5, 60.5], [300.5, 60.5], 12.0, [40, 40, 200]);
+    cable.metal_end_px = 20.0;
+    let out = render(&plain(400, 120, vec![cable]), &mut rng(1)).unwrap();
+    for x in [105, 295] {
+        assert_eq!(at(&out.masks[0], f64::from(x), 60.0), 255);
+        let p = pixel(&out.bgr, x, 60);
+        // Grey, not the red insulation: its channels alike.
+        assert!((p[0] - p[2]).abs() < 25.0 && p[1] > 100.0, "{p:?} at x {x}");
+    }
+    let p = pixel(&out.bgr, 200, 60);
+    assert!(p[2] > p[0] + 60.0, "{p:?}: the insulation in the middle");
+}
+
+#[test]
+fn busy_scenes_are_drip_paintings_mosaics_or_print_with_metal_ended_cables() {
+    let options = SceneOptions {
+        backgrounds: BackgroundChoice::Busy,
+        min_diameter_px: 8.0,
+        max_diameter_px: 16.0,
+        ..SceneOptions::default()
+    };
+    let scenes: Vec<SceneSpec> = (0..40)
+        .map(|seed| random_scene(&mut rng(seed), &options))
+        .collect();
+    for kind in [Background::Pollock, Background::Mosaic, Background::Printed] {
+        assert!(scenes.iter().any(|s| s.background == kind), "{kind:?}");
+    }
+    let cables: Vec<&CableSpec> = scenes.iter().flat_map(|s| &s.cables).collect();
+    let metal = cables.iter().filter(|c| c.metal_end_px > 0.0).count();
+    assert!(
+        metal > 0 && metal < cables.len(),
+        "{metal} of {}",
+        cables.len()
+    );
+    assert!(cables.iter().all(|c| (8.0..=16.0).contains(&c.diameter_px)));
+    // Each renders, its busy background far from one colour.
+    for scene in scenes.iter().take(6) {
+        let out = render(scene, &mut rng(2)).unwrap();
+        let mut mean = Mat::default();
+        let mut sigma = Mat::default();
+        core::mean_std_dev(&out.bgr, &mut mean, &mut sigma, &core::no_array()).unwrap();
+        let spread = *sigma.at::<f64>(0).unwrap();
+        assert!(spread > 20.0, "{:?}: σ {spread}", scene.background);
+    }
+    // Other choices draw no metal, and their scenes are as before.
+    let any = random_scene(&mut rng(3), &SceneOptions::default());
+    assert!(any.cables.iter().all(|c| c.metal_end_px == 0.0));
 }
 
 #[test]

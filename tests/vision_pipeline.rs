@@ -937,6 +937,7 @@ fn a_doubtful_classical_mask_on_a_plain_table_gives_way_to_the_network() {
             diameter_px,
             bgr,
             gloss,
+            metal_end_px: 0.0,
         };
         draw_scene(
             480,

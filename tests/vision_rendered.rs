@@ -71,6 +71,7 @@ fn cable(from: [f64; 2], to: [f64; 2], bow_px: f64, bgr: [u8; 3]) -> CableSpec {
         diameter_px: 8.0,
         bgr,
         gloss: 0.3,
+        metal_end_px: 0.0,
     }
 }
 

@@ -31,8 +31,6 @@ use crate::hw::tactile::remodel_emulator::{self, TactileEmulator};
 use crate::hw::tactile::{PolledTactile, RemodelTactile, SimTactile, TactileSensor};
 use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::TAXEL_COUNT;
-use crate::perception::vision::Pipeline;
-use crate::perception::vision::network::{DEFAULT_THRESHOLD, LazyNetwork, runtime_library};
 use crate::sim::motion::CartesianLimits;
 use crate::sim::tactile_model::SimTactileConfig;
 use crate::sim::tactile_model::TactileModel;
@@ -213,12 +211,8 @@ impl CellDevices {
                 rng(seed, Stream::Detector),
             )),
             DetectorBackend::Vision(vision) => Box::new(VisionDetector::new(
-                Pipeline::new(vision.vision()),
-                LazyNetwork::new(
-                    vision.model.clone(),
-                    runtime_library(vision.onnxruntime.as_deref()),
-                )
-                .tuned(DEFAULT_THRESHOLD, vision.net_scale),
+                vision.pipeline(false),
+                vision.network(),
                 camera_config
                     .calibration
                     .as_ref()

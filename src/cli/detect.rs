@@ -1,13 +1,8 @@
 //! `cablecell detect IMAGE...`
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-use cablecell::cell::CellFile;
-
-use cablecell::detector::config::DetectorBackend;
-
-use cablecell::cell::load_cell_uncalibrated;
+use cablecell::detector::config::VisionDetectorConfig;
 use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::grasp_frame::ImageToBase;
 use cablecell::perception::vision::{CableInstance, MaskNetwork, VisionOutput};
@@ -18,7 +13,9 @@ use serde::Serialize;
 
 use super::output::outln;
 use super::progress;
-use super::vision_io::{VisionArgs, create_dir, draw_overlay, write_png};
+use super::vision_io::{
+    VisionArgs, cell_vision_detector, create_dir, draw_overlay, warm_up, write_png,
+};
 use super::{Status, output};
 
 /// What `detect --json` prints.
@@ -61,24 +58,18 @@ struct GraspInBase {
     rotation_rpy_rad: [f64; 3],
 }
 
-/// How the cell at `cell_path` places image points in the base frame: its
-/// calibrated camera and the vision detector's cable plane.
-fn image_to_base(cell_path: &Path) -> Result<ImageToBase, String> {
-    let file: CellFile = load_cell_uncalibrated(cell_path).map_err(|e| e.to_string())?;
+/// The cell at `cell_path`'s vision detector, and how it places image
+/// points in the base frame: its calibrated camera and the cable's plane.
+fn cell_vision(cell_path: &Path) -> Result<(VisionDetectorConfig, ImageToBase), String> {
+    let (file, vision) = cell_vision_detector(cell_path)?;
     let name = cell_path.display();
     let calibration = file.camera.calibration.as_ref().ok_or_else(|| {
         format!(
             "{name}: the camera is not calibrated: run `cablecell calibrate-camera --cell {name}`"
         )
     })?;
-    match &file.detector.backend {
-        DetectorBackend::Vision(vision) => {
-            Ok(vision.image_to_base(file.camera.intrinsics, calibration))
-        }
-        DetectorBackend::Oracle(_) => Err(format!(
-            "{name}: detector.backend: the cell has no vision detector, so no cable plane to place grasp points on"
-        )),
-    }
+    let to_base = vision.image_to_base(file.camera.intrinsics, calibration);
+    Ok((vision, to_base))
 }
 
 pub fn detect(
@@ -89,15 +80,23 @@ pub fn detect(
     masks: Option<&Path>,
     overlay: Option<&Path>,
 ) -> Status {
-    let to_base = match cell.map(image_to_base).transpose() {
-        Ok(to_base) => to_base,
+    let cell_vision = match cell.map(cell_vision).transpose() {
+        Ok(cell_vision) => cell_vision,
         Err(error) => {
             eprintln!("error: {error}");
             return Status::BadInput;
         }
     };
-    let mut pipeline = args.pipeline(masks.is_some());
-    let mut network = args.network();
+    // With a cell, its detector's own settings: the cables the task's
+    // detect state would find.
+    let (mut pipeline, mut network, to_base) = match cell_vision {
+        Some((vision, to_base)) => (
+            vision.pipeline(masks.is_some()),
+            vision.network(),
+            Some(to_base),
+        ),
+        None => (args.pipeline(masks.is_some()), args.network(), None),
+    };
     let mut reports = Vec::new();
     let mut status = Status::Success;
     let mut warmed_up = false;
@@ -116,17 +115,10 @@ pub fn detect(
             }
         };
         if !warmed_up {
-            // One untimed run, so that the times reported are a warmed-up
-            // pipeline's, as in `eval-vision` and the benchmarks. An error
-            // here recurs in the timed run, which reports it.
             warmed_up = true;
-            let start = Instant::now();
-            let _ = pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork));
+            let line = warm_up(&mut pipeline, &mut network, &image);
             if !json {
-                bar.suspend(|| outln!(
-                    "start-up: {:.1} ms (the first image run once, untimed: one-off set-up such as loading the network)",
-                    start.elapsed().as_secs_f64() * 1e3
-                ));
+                bar.suspend(|| outln!("{line}"));
             }
         }
         let output = match pipeline.detect(&image, Some(&mut network as &mut dyn MaskNetwork)) {

@@ -73,6 +73,9 @@ pub enum BackgroundArg {
     Plain,
     Cluttered,
     Any,
+    /// Drip paintings, mosaics and print, cables with metal ends: the
+    /// paper's kind of scene.
+    Busy,
 }
 
 pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
@@ -137,6 +140,7 @@ fn scene_options(args: &RenderDatasetArgs) -> Result<SceneOptions, String> {
             BackgroundArg::Plain => BackgroundChoice::Plain,
             BackgroundArg::Cluttered => BackgroundChoice::Cluttered,
             BackgroundArg::Any => BackgroundChoice::Any,
+            BackgroundArg::Busy => BackgroundChoice::Busy,
         },
         crossings: !args.no_crossings,
         min_diameter_px: args.min_diameter_px,

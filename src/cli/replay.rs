@@ -5,6 +5,8 @@ use std::path::Path;
 
 use cablecell::geometry::LineInSensor;
 use cablecell::perception::tactile::Estimator;
+use cablecell::perception::vision::Pipeline;
+use cablecell::perception::vision::network::LazyNetwork;
 use cablecell::recording::replay::{Refit, Replay};
 use cablecell::recording::schema::CompressedImageMessage;
 use cablecell::recording::{Recording, Topic};
@@ -13,9 +15,14 @@ use opencv::prelude::*;
 
 use super::Status;
 use super::run::print_timeline_line;
-use super::vision_io::VisionArgs;
+use super::vision_io::{VisionArgs, cell_vision_detector, warm_up};
 
-pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>) -> Status {
+pub fn replay(
+    path: &Path,
+    estimators: &[Estimator],
+    vision: Option<&VisionArgs>,
+    cell: Option<&Path>,
+) -> Status {
     let recording = match Recording::read(path) {
         Ok(recording) => recording,
         Err(error) => {
@@ -65,14 +72,40 @@ pub fn replay(path: &Path, estimators: &[Estimator], vision: Option<&VisionArgs>
         );
         refits.iter().for_each(print_refit);
     }
-    match vision {
-        Some(args) => detect_again(&recording, args),
-        None => Status::Success,
-    }
+    let Some(args) = vision else {
+        return Status::Success;
+    };
+    // With a cell, its detector's own settings: what the task's detect
+    // state ran.
+    let (pipeline, network, settings) = match cell.map(cell_vision_detector).transpose() {
+        Ok(Some((_, vision))) => (
+            vision.pipeline(false),
+            vision.network(),
+            format!(
+                "{}'s detector",
+                cell.map_or_else(String::new, |c| c.display().to_string())
+            ),
+        ),
+        Ok(None) => (
+            args.pipeline(false),
+            args.network(),
+            "the options given".to_owned(),
+        ),
+        Err(error) => {
+            eprintln!("error: {error}");
+            return Status::BadInput;
+        }
+    };
+    detect_again(&recording, pipeline, network, &settings)
 }
 
-/// Runs the vision pipeline of `args` on every recorded camera image.
-fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
+/// Runs `pipeline` on every recorded camera image.
+fn detect_again(
+    recording: &Recording,
+    mut pipeline: Pipeline,
+    mut network: LazyNetwork,
+    settings: &str,
+) -> Status {
     let images: Vec<CompressedImageMessage> = match recording.decode(Topic::CameraImage) {
         Ok(images) => images,
         Err(error) => {
@@ -80,10 +113,12 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
             return Status::BadInput;
         }
     };
-    outln!("vision again on the recorded images ({}):", images.len());
-    let mut pipeline = args.pipeline(false);
-    let mut network = args.network();
+    outln!(
+        "vision again on the recorded images ({}), with {settings}:",
+        images.len()
+    );
     let mut status = Status::Success;
+    let mut warmed_up = false;
     // Times from the recording's start (its times are dates).
     let start_ns = recording.messages.first().map_or(0, |m| m.log_time_ns);
     for message in &images {
@@ -100,6 +135,10 @@ fn detect_again(recording: &Recording, args: &VisionArgs) -> Status {
                 continue;
             }
         };
+        if !warmed_up {
+            warmed_up = true;
+            outln!("{}", warm_up(&mut pipeline, &mut network, &image));
+        }
         match pipeline.detect(&image, Some(&mut network)) {
             Ok(output) => {
                 let total_ms: f64 = output.timings_ms.iter().map(|(_, ms)| ms).sum();

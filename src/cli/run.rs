@@ -11,8 +11,8 @@ use cablecell::orchestrator::Runner;
 use cablecell::orchestrator::breakpoint::Breakpoints;
 use cablecell::orchestrator::driver::{Driver, Mode, Stop};
 use cablecell::perception::shape::Distances;
+use cablecell::record::{DetectedCable, RunOutcome, RunRecord};
 use cablecell::record::{GraspRecord, RunReport, ShapeErrors, TransitionRecord};
-use cablecell::record::{RunOutcome, RunRecord};
 use cablecell::recording::{LiveServer, RecordingTarget};
 use cablecell::task::{load_task, load_task_on_cell};
 
@@ -355,7 +355,27 @@ pub(super) fn print_outcome(record: &RunRecord) {
         }
         None => outln!("the run stopped before it ended"),
     }
+    if let Some(why) = chosen_cable(&record.detected) {
+        outln!("{why}");
+    }
     for skip in &record.skipped {
         outln!("skipped: {}: {}", skip.what, skip.why);
     }
+}
+
+/// Which detected cable the task grasped, and why.
+fn chosen_cable(detected: &[DetectedCable]) -> Option<String> {
+    let best = detected.first()?;
+    Some(match detected.get(1) {
+        None => format!(
+            "grasped the one cable detected (confidence {:.2})",
+            best.confidence
+        ),
+        Some(next) => format!(
+            "grasped the most confident of {} cables detected ({:.2}; the next {:.2})",
+            detected.len(),
+            best.confidence,
+            next.confidence
+        ),
+    })
 }

@@ -4,13 +4,16 @@
 
 use std::path::{Path, PathBuf};
 
+use cablecell::cell::{CellFile, load_cell_uncalibrated};
+use cablecell::detector::config::{DetectorBackend, VisionDetectorConfig};
+
 use cablecell::perception::vision::network::{
     DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE,
     runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{
-    InstanceMethod, MaskMethod, Pipeline, VisionConfig, VisionOutput,
+    DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, Pipeline, VisionConfig, VisionOutput,
 };
 use clap::Args;
 use opencv::core::{Mat, Point, Scalar, Vector};
@@ -64,6 +67,10 @@ pub struct VisionArgs {
     /// them (for a cable held taut).
     #[arg(long, default_value_t = VisionConfig::default().straight_edge_radius_px, value_parser = length_px)]
     pub straight_edge_radius_px: f64,
+    /// Drop detections less confident than this (0 to 1; see `detect`'s
+    /// `confidence`): splashes of paint and brushed strokes; 0 keeps all.
+    #[arg(long, default_value_t = DEFAULT_MIN_CONFIDENCE, value_parser = confidence)]
+    pub min_confidence: f64,
 }
 
 fn number_in(text: &str, low: f64, high: f64) -> Result<f64, String> {
@@ -93,6 +100,17 @@ fn length_px(text: &str) -> Result<f64, String> {
         Ok(value)
     } else {
         Err(format!("{value} is not a length of 0 px or more"))
+    }
+}
+
+fn confidence(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if (0.0..=1.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{value} is outside [0, 1]"))
     }
 }
 
@@ -132,6 +150,7 @@ impl VisionArgs {
             min_cable_length_px: self.min_length_px,
             min_border_cable_length_px: self.min_border_length_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
+            min_confidence: self.min_confidence,
             cable_masks,
             ..VisionConfig::default()
         };
@@ -145,6 +164,36 @@ impl VisionArgs {
         )
         .tuned(self.threshold, self.net_scale)
     }
+}
+
+/// The cell file at `path`, and its vision detector's settings: what a
+/// command given `--cell` runs, so that it finds the cables the task's
+/// detect state finds.
+pub fn cell_vision_detector(path: &Path) -> Result<(CellFile, VisionDetectorConfig), String> {
+    let file: CellFile = load_cell_uncalibrated(path).map_err(|e| e.to_string())?;
+    match &file.detector.backend {
+        DetectorBackend::Vision(vision) => {
+            let vision = vision.clone();
+            Ok((file, vision))
+        }
+        DetectorBackend::Oracle(_) => Err(format!(
+            "{}: detector.backend: the cell has no vision detector",
+            path.display()
+        )),
+    }
+}
+
+/// Runs `pipeline` once on `image`, untimed, so that the times reported
+/// after it are a warmed-up pipeline's (loading the network is no image's
+/// time); the line that says what it cost. An error here recurs in the
+/// timed run, which reports it.
+pub fn warm_up(pipeline: &mut Pipeline, network: &mut LazyNetwork, image: &Mat) -> String {
+    let start = std::time::Instant::now();
+    let _ = pipeline.detect(image, Some(network));
+    format!(
+        "start-up: {:.1} ms (the first image run once, untimed: one-off set-up such as loading the network)",
+        start.elapsed().as_secs_f64() * 1e3
+    )
 }
 
 pub fn create_dir(dir: &Path) -> Result<(), String> {

@@ -12,9 +12,10 @@ use crate::hw::camera::config::CalibrationConfig;
 use crate::perception::vision::calibration::CameraModel;
 use crate::perception::vision::grasp_frame::{ImageToBase, PlaneInBase};
 use crate::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, MAX_INPUT_SCALE, input_scale_is_valid,
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE, input_scale_is_valid,
+    runtime_library,
 };
-use crate::perception::vision::{InstanceMethod, MaskMethod, VisionConfig};
+use crate::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
 use crate::schema::validate::{finite, non_negative, unit_vector3, vector3};
 
 #[derive(Debug, Clone, Deserialize)]
@@ -122,6 +123,27 @@ impl VisionDetectorConfig {
             cable_masks: false,
             ..VisionConfig::default()
         }
+    }
+
+    /// The pipeline as the cell's detect state runs it; `cable_masks`:
+    /// whether to keep each cable's mask too (for a command that writes
+    /// them). `detect --cell` and `replay --vision --cell` run this, so
+    /// that they find what the task found.
+    pub fn pipeline(&self, cable_masks: bool) -> Pipeline {
+        Pipeline::new(VisionConfig {
+            cable_masks,
+            ..self.vision()
+        })
+    }
+
+    /// The network as the cell's detect state runs it, loaded when a scene
+    /// first needs it.
+    pub fn network(&self) -> LazyNetwork {
+        LazyNetwork::new(
+            self.model.clone(),
+            runtime_library(self.onnxruntime.as_deref()),
+        )
+        .tuned(DEFAULT_THRESHOLD, self.net_scale)
     }
 
     /// How image points become base-frame points for a camera at

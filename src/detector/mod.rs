@@ -29,12 +29,15 @@ pub struct CableDetection {
     /// was seen of it (nothing of a stretch hidden from the camera), each
     /// point with its σ: the vision shape a fusion starts from.
     pub centre_line: Vec<ShapePoint>,
+    /// How much the detection looks like a cable, 0 to 1 (the vision
+    /// pipeline's; 1 for the oracle, which knows).
+    pub confidence: f64,
 }
 
 /// What a detector found, and the image it looked at, if it looked.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Detections {
-    /// Every cable in view, best first.
+    /// Every cable in view, best first (the most confident).
     pub cables: Vec<CableDetection>,
     pub image: Option<CameraImage>,
     /// What the vision pipeline left out because the scene did not need

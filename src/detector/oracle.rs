@@ -56,6 +56,7 @@ impl CableDetector for OracleDetector {
             cables: vec![CableDetection {
                 base_from_cable,
                 centre_line,
+                confidence: 1.0,
             }],
             image: None,
             skipped: Vec::new(),

@@ -35,8 +35,8 @@ impl VisionDetector {
 }
 
 impl CableDetector for VisionDetector {
-    /// The cables in the camera's image, the longest in view first (the
-    /// one least likely to be a scrap of clutter).
+    /// The cables in the camera's image, the most confident first (the one
+    /// most like a cable: long, evenly wide), the longer of two alike.
     fn detect(&mut self, camera: &mut dyn Camera) -> Result<Detections, DeviceError> {
         let Some(to_base) = self.to_base else {
             return Err(DeviceError::Unusable {
@@ -71,11 +71,12 @@ impl CableDetector for VisionDetector {
                 let detection = CableDetection {
                     base_from_cable,
                     centre_line,
+                    confidence: cable.confidence,
                 };
                 Some((cable.length_px, detection))
             })
             .collect();
-        found.sort_by(|a, b| b.0.total_cmp(&a.0));
+        found.sort_by(|a, b| (b.1.confidence.total_cmp(&a.1.confidence)).then(b.0.total_cmp(&a.0)));
         Ok(Detections {
             cables: found.into_iter().map(|(_, detection)| detection).collect(),
             image: Some(CameraImage(Arc::new(image))),

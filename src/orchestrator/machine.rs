@@ -36,8 +36,8 @@ use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::tactile::search::{Prior, SearchPose, covered_half_width_mm, search_poses};
 use crate::perception::tactile::{Bias, BiasEstimator, FitError, RawFrame};
 use crate::record::{
-    Failure, GraspRecord, RunOutcome, RunRecord, Skip, Skipped, TouchOnlyRecord, TransitionRecord,
-    Truth, WhyTouchOnly,
+    DetectedCable, Failure, GraspRecord, RunOutcome, RunRecord, Skip, Skipped, TouchOnlyRecord,
+    TransitionRecord, Truth, WhyTouchOnly,
 };
 
 /// What the machine shares with the runner: lent to the machine for each
@@ -373,6 +373,14 @@ impl GraspTask {
     /// spares, when the task has a prior); else search from the prior, or
     /// fail without one.
     fn on_detected(&mut self, context: &mut Context, detections: &Detections) -> Outcome<State> {
+        context.record.detected = detections
+            .cables
+            .iter()
+            .map(|cable| DetectedCable {
+                confidence: cable.confidence,
+                base_from_cable: cable.base_from_cable,
+            })
+            .collect();
         match (detections.cables.first(), context.plan.prior) {
             (Some(detection), prior) => {
                 if prior.is_some() {
@@ -799,6 +807,7 @@ mod tests {
             let detection = CableDetection {
                 base_from_cable: Isometry3::identity(),
                 centre_line: Vec::new(),
+                confidence: 1.0,
             };
             let moved = self.feed(Event::Detected(Detections {
                 cables: vec![detection],
@@ -991,6 +1000,7 @@ mod tests {
             cables: vec![CableDetection {
                 base_from_cable: Isometry3::identity(),
                 centre_line: Vec::new(),
+                confidence: 1.0,
             }],
             image: None,
             skipped: Vec::new(),

@@ -38,6 +38,7 @@ pub fn matte_cable(centerline_px: Vec<[f64; 2]>, diameter_px: f64, bgr: [u8; 3])
         diameter_px,
         bgr,
         gloss: 0.0,
+        metal_end_px: 0.0,
     }
 }
 

@@ -20,7 +20,7 @@ pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};
 pub use mask::BackgroundStats;
 pub use pipeline::{
-    CableInstance, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork, Pipeline, VisionConfig,
-    VisionOutput, VisionSkip,
+    CableInstance, DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork,
+    Pipeline, VisionConfig, VisionOutput, VisionSkip,
 };
 pub use spline::BSpline;

@@ -26,6 +26,8 @@ pub(super) fn draw(
         Background::Wood => wood(width, height, rng),
         Background::Printed => printed(width, height, rng),
         Background::Sheets => sheets(width, height, rng),
+        Background::Pollock => pollock(width, height, rng),
+        Background::Mosaic => mosaic(width, height, rng),
     }
 }
 
@@ -427,4 +429,209 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
     core::scale_add(&mottle, rng.random_range(3.0..15.0), &out, &mut sum)
         .map_err(cv("mottle the sheets"))?;
     Ok(sum)
+}
+
+/// A paint's colour: black or white a third of the time (drip paintings
+/// use them most), else any hue at any strength.
+fn paint(rng: &mut impl Rng) -> [f64; 3] {
+    match rng.random_range(0..6) {
+        0 => near(rng, [25.0; 3], 15.0),
+        1 => near(rng, [235.0; 3], 15.0),
+        _ => from_hsv(
+            rng.random_range(0.0..360.0),
+            rng.random_range(0.2..1.0),
+            rng.random_range(0.25..1.0),
+        ),
+    }
+}
+
+/// A wandering path a few pixels a step, curling more than a cable does
+/// (poured paint follows the wrist, not a stiff wire), from anywhere in
+/// the image, `length_px` long.
+fn wandering_path(rng: &mut impl Rng, width: i32, height: i32, length_px: f64) -> Vec<Point> {
+    const STEP_PX: f64 = 3.0;
+    let (mut x, mut y) = (
+        rng.random_range(0.0..f64::from(width)),
+        rng.random_range(0.0..f64::from(height)),
+    );
+    let mut heading = rng.random_range(0.0..TAU);
+    let curl = rng.random_range(0.02..0.25);
+    let mut turn = 0.0_f64;
+    let mut points = vec![Point::new(x as i32, y as i32)];
+    for _ in 0..(length_px / STEP_PX) as usize {
+        turn = 0.8 * turn + rng.random_range(-curl..=curl);
+        heading += turn;
+        x += STEP_PX * heading.cos();
+        y += STEP_PX * heading.sin();
+        points.push(Point::new(x.round() as i32, y.round() as i32));
+    }
+    points
+}
+
+/// A drip painting: a canvas, then layers of poured lines (thin, long),
+/// brushed strokes (as wide as cables, their width swelling and thinning)
+/// and splatters (clusters of drops), each in one of a few paints.
+fn pollock(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let canvas = if rng.random_bool(0.3) {
+        colour(rng, 15.0..80.0)
+    } else {
+        colour(rng, 160.0..240.0)
+    };
+    let mut image = Mat::new_rows_cols_with_default(
+        height,
+        width,
+        core::CV_8UC3,
+        Scalar::new(canvas[0], canvas[1], canvas[2], 0.0),
+    )
+    .map_err(cv("allocate the canvas"))?;
+    let palette: Vec<[f64; 3]> = (0..rng.random_range(3..9)).map(|_| paint(rng)).collect();
+    let area = f64::from(width) * f64::from(height) / (640.0 * 480.0);
+    let marks = (f64::from(rng.random_range(20..90)) * area).ceil() as usize;
+    let diagonal = f64::from(width).hypot(f64::from(height));
+    for _ in 0..marks {
+        let ink = palette[rng.random_range(0..palette.len())];
+        let ink = Scalar::new(ink[0], ink[1], ink[2], 0.0);
+        match rng.random_range(0..5) {
+            0..=1 => {
+                let length_px = rng.random_range(0.2..1.5) * diagonal;
+                let path = wandering_path(rng, width, height, length_px);
+                let thickness = rng.random_range(1..5);
+                let path = core::Vector::<core::Vector<Point>>::from_iter([path.into()]);
+                imgproc::polylines(
+                    &mut image,
+                    &path,
+                    false,
+                    ink,
+                    thickness,
+                    imgproc::LINE_AA,
+                    0,
+                )
+                .map_err(cv("pour a line"))?;
+            }
+            2..=3 => {
+                let length_px = rng.random_range(0.05..0.6) * diagonal;
+                let path = wandering_path(rng, width, height, length_px);
+                let widest = rng.random_range(4.0..20.0);
+                let (phase, period) = (rng.random_range(0.0..TAU), rng.random_range(5.0..40.0));
+                for (k, pair) in path.windows(2).enumerate() {
+                    let swell = 0.5 + 0.5 * (phase + k as f64 / period).sin().abs();
+                    let thickness = (widest * swell).round().max(1.0) as i32;
+                    imgproc::line(
+                        &mut image,
+                        pair[0],
+                        pair[1],
+                        ink,
+                        thickness,
+                        imgproc::LINE_AA,
+                        0,
+                    )
+                    .map_err(cv("brush a stroke"))?;
+                }
+            }
+            _ => {
+                let centre = [
+                    rng.random_range(0.0..f64::from(width)),
+                    rng.random_range(0.0..f64::from(height)),
+                ];
+                let spread = rng.random_range(5.0..60.0);
+                for _ in 0..rng.random_range(5..40) {
+                    let (sin, cos) = rng.random_range(0.0..TAU).sin_cos();
+                    let r = spread * rng.random_range(0.0..1.0_f64).sqrt();
+                    let at = Point::new(
+                        (centre[0] + r * cos).round() as i32,
+                        (centre[1] + r * sin).round() as i32,
+                    );
+                    let radius = rng.random_range(1.0..7.0_f64);
+                    let axes = Size::new(
+                        (radius * rng.random_range(1.0..3.0)).round() as i32,
+                        radius.round() as i32,
+                    );
+                    let angle = sin.atan2(cos).to_degrees();
+                    imgproc::ellipse(
+                        &mut image,
+                        at,
+                        axes,
+                        angle,
+                        0.0,
+                        360.0,
+                        ink,
+                        imgproc::FILLED,
+                        imgproc::LINE_AA,
+                        0,
+                    )
+                    .map_err(cv("splatter a drop"))?;
+                }
+            }
+        }
+    }
+    let mut out = Mat::default();
+    image
+        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv("convert the canvas"))?;
+    // The canvas's weave and the paint's thickness: a faint mottle.
+    let mottle = smooth_noise(width, height, 40, 30, 3, rng)?;
+    let mut sum = Mat::default();
+    core::scale_add(&mottle, rng.random_range(3.0..12.0), &out, &mut sum)
+        .map_err(cv("mottle the canvas"))?;
+    Ok(sum)
+}
+
+/// A printed mosaic: the Voronoi cells of random points (OpenCV's
+/// `Subdiv2D`), each a strong colour, with grout lines between them.
+fn mosaic(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderError> {
+    let mut image =
+        Mat::new_rows_cols_with_default(height, width, core::CV_8UC3, Scalar::all(128.0))
+            .map_err(cv("allocate the mosaic"))?;
+    let area = f64::from(width) * f64::from(height);
+    let tile_px = rng.random_range(12.0..70.0_f64);
+    let count = ((area / (tile_px * tile_px)).ceil() as usize).max(2);
+    let seeds: core::Vector<core::Point2f> = (0..count)
+        .map(|_| {
+            core::Point2f::new(
+                rng.random_range(0.0..width as f32),
+                rng.random_range(0.0..height as f32),
+            )
+        })
+        .collect();
+    let mut subdivision =
+        imgproc::Subdiv2D::new(Rect::new(0, 0, width, height)).map_err(cv("start the tiling"))?;
+    subdivision
+        .insert_multiple(&seeds)
+        .map_err(cv("place the tiles"))?;
+    let mut facets = core::Vector::<core::Vector<core::Point2f>>::new();
+    let mut centres = core::Vector::<core::Point2f>::new();
+    subdivision
+        .get_voronoi_facet_list(&core::Vector::new(), &mut facets, &mut centres)
+        .map_err(cv("cut the tiles"))?;
+    let grout = colour(rng, 30.0..230.0);
+    let grout = Scalar::new(grout[0], grout[1], grout[2], 0.0);
+    let grout_px = rng.random_range(0..4);
+    for facet in &facets {
+        let outline: core::Vector<Point> = facet
+            .iter()
+            .map(|p| Point::new(p.x.round() as i32, p.y.round() as i32))
+            .collect();
+        let tile = paint(rng);
+        let tile = Scalar::new(tile[0], tile[1], tile[2], 0.0);
+        imgproc::fill_convex_poly(&mut image, &outline, tile, imgproc::LINE_AA, 0)
+            .map_err(cv("lay a tile"))?;
+        if grout_px > 0 {
+            let outline = core::Vector::<core::Vector<Point>>::from_iter([outline]);
+            imgproc::polylines(
+                &mut image,
+                &outline,
+                true,
+                grout,
+                grout_px,
+                imgproc::LINE_AA,
+                0,
+            )
+            .map_err(cv("grout a tile"))?;
+        }
+    }
+    let mut out = Mat::default();
+    image
+        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv("convert the mosaic"))?;
+    Ok(out)
 }

@@ -67,6 +67,14 @@ pub enum Background {
     /// on a table, some punched along one edge: long straight edges and
     /// rows of holes that are not cables.
     Sheets,
+    /// A drip painting like the Pollock print of the paper's Fig. 1:
+    /// layers of poured lines, brushed strokes and splatters in many
+    /// colours and widths over a canvas. The strokes are as long and wide
+    /// as cables but flat, not shaded like a tube.
+    Pollock,
+    /// A printed mosaic: tiles of many strong colours (a Voronoi tiling)
+    /// with grout lines between them.
+    Mosaic,
 }
 
 /// A cable to draw: its centre line in the image (a smooth curve, points
@@ -79,6 +87,9 @@ pub struct CableSpec {
     /// Strength of the specular highlight along the cable (0: matte,
     /// 1: glossy insulation).
     pub gloss: f64,
+    /// Length of the bare metal (a ferrule or stripped strands) at each
+    /// end of the centre line; 0 for none. It is part of the cable's mask.
+    pub metal_end_px: f64,
 }
 
 /// The scene's light.
@@ -541,6 +552,7 @@ mod tests {
             diameter_px: 2.0,
             bgr: [0, 0, 0],
             gloss: 0.0,
+            metal_end_px: 0.0,
         });
         assert!(matches!(
             render(&scene, &mut rng),

@@ -22,6 +22,9 @@ pub enum BackgroundChoice {
     Cluttered,
     /// Either, cluttered more often.
     Any,
+    /// The paper's kind of scene: drip paintings, mosaics and print, the
+    /// cables with bare metal at their ends.
+    Busy,
 }
 
 /// What random scenes may hold.
@@ -69,6 +72,19 @@ const CLUTTERED: [Background; 6] = [
     Background::Sheets,
 ];
 
+/// The backgrounds a busy scene draws from, drip paintings most often.
+const BUSY: [Background; 4] = [
+    Background::Pollock,
+    Background::Pollock,
+    Background::Mosaic,
+    Background::Printed,
+];
+
+/// In a busy scene, the share of cables with bare metal ends, and how
+/// long the metal is, in diameters.
+const METAL_END_SHARE: f64 = 0.7;
+const METAL_END_DIAMETERS: std::ops::Range<f64> = 1.0..3.5;
+
 /// Typical wire insulation colours (BGR): black, white, red, blue, green,
 /// yellow, orange, brown, gray, violet, light blue.
 const WIRE_COLOURS: [[u8; 3]; 11] = [
@@ -103,7 +119,9 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         BackgroundChoice::Cluttered => cluttered_background(rng),
         BackgroundChoice::Any if rng.random_bool(0.35) => plain_background(rng),
         BackgroundChoice::Any => cluttered_background(rng),
+        BackgroundChoice::Busy => BUSY[rng.random_range(0..BUSY.len())].clone(),
     };
+    let busy = options.backgrounds == BackgroundChoice::Busy;
 
     let low = options.min_cables.min(options.max_cables);
     let high = options.min_cables.max(options.max_cables);
@@ -120,11 +138,17 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
             let Some(centerline_px) = random_curve(rng, width, height, diameter_px / 2.0) else {
                 continue;
             };
+            let metal_end_px = if busy && rng.random_bool(METAL_END_SHARE) {
+                diameter_px * rng.random_range(METAL_END_DIAMETERS)
+            } else {
+                0.0
+            };
             let candidate = CableSpec {
                 centerline_px,
                 diameter_px,
                 bgr: wire_colour(rng, &background),
                 gloss: rng.random_range(0.0..0.6),
+                metal_end_px,
             };
             if options.crossings || cables.iter().all(|other| apart(&candidate, other)) {
                 cables.push(candidate);

@@ -20,6 +20,10 @@ const SHADOW_SHIFT_RADII: f64 = 0.7;
 const SHADOW_SOFTNESS_RADII: f64 = 0.8;
 /// Pixels the anti-aliased edge spreads over beyond the radius.
 const EDGE_PX: f64 = 0.5;
+/// Bare metal at a cable's ends: tinned copper or a steel ferrule, silver
+/// and glossier than any insulation.
+const METAL_BGR: [f64; 3] = [175.0, 178.0, 182.0];
+const METAL_GLOSS: f64 = 0.9;
 
 /// Each pixel's nearest point on the centre line, over a box of the image.
 struct Field {
@@ -31,6 +35,10 @@ struct Field {
     distance: Vec<f32>,
     /// The offset from the nearest centre-line point to the pixel.
     offset: Vec<[f32; 2]>,
+    /// The arc length of the centre line at that point.
+    arc: Vec<f32>,
+    /// The centre line's whole length.
+    length: f64,
 }
 
 impl Field {
@@ -75,7 +83,7 @@ pub(super) fn draw(
     let l = light.toward_light;
     // Half-way between the light and the viewer, for the highlight.
     let half = super::unit([l[0], l[1], l[2] + 1.0]);
-    let colour = cable.bgr.map(f64::from);
+    let insulation = cable.bgr.map(f64::from);
     for fy in 0..field.height {
         let y = field.y0 + fy;
         for fx in 0..field.width {
@@ -118,7 +126,14 @@ pub(super) fn draw(
             }
             let nz = (1.0 - nx * nx - ny * ny).max(0.0).sqrt();
             let diffuse = (nx * l[0] + ny * l[1] + nz * l[2]).max(0.0);
-            let specular = cable.gloss
+            let arc = f64::from(field.arc[i]);
+            let bare = arc < cable.metal_end_px || arc > field.length - cable.metal_end_px;
+            let (colour, gloss) = if bare {
+                (METAL_BGR, METAL_GLOSS)
+            } else {
+                (insulation, cable.gloss)
+            };
+            let specular = gloss
                 * 255.0
                 * (nx * half[0] + ny * half[1] + nz * half[2])
                     .max(0.0)
@@ -178,12 +193,16 @@ fn distance_field(
         height: field_height,
         distance: vec![f32::INFINITY; size],
         offset: vec![[0.0; 2]; size],
+        arc: vec![0.0; size],
+        length: 0.0,
     };
 
     for pair in kept.windows(2) {
         let (a, b) = (pair[0], pair[1]);
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let length2 = dx * dx + dy * dy;
+        let start_arc = field.length;
+        field.length += length2.sqrt();
         let sx0 = ((a[0].min(b[0]) - reach).floor() as i32).max(x0);
         let sy0 = ((a[1].min(b[1]) - reach).floor() as i32).max(y0);
         let sx1 = ((a[0].max(b[0]) + reach).ceil() as i32).min(x1);
@@ -204,6 +223,7 @@ fn distance_field(
                 if d < field.distance[i] {
                     field.distance[i] = d;
                     field.offset[i] = [ox as f32, oy as f32];
+                    field.arc[i] = (start_arc + t * length2.sqrt()) as f32;
                 }
             }
         }

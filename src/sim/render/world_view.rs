@@ -58,6 +58,7 @@ pub fn render_world(
             diameter_px: focal_px * world.cable_diameter_mm / mean_depth_mm,
             bgr: appearance.cable_bgr,
             gloss: appearance.cable_gloss,
+            metal_end_px: 0.0,
         });
     }
 

@@ -331,6 +331,7 @@ mod tests {
             grasp_px: samples_px[10],
             direction_rad: 0.0,
             length_px: polyline_length(&samples_px),
+            confidence: 1.0,
             mask: Some(draw_paths(120, 160, &[samples_px.as_slice()], 7).unwrap()),
             samples_px,
         }

@@ -84,7 +84,14 @@ pub struct VisionConfig {
     /// 1920 × 1440 the masks take about as long as the network, so the
     /// cell's detector leaves them out.
     pub cable_masks: bool,
+    /// Detections less confident than this (see `confidence.rs`) are
+    /// dropped as probably not cables: splashes of paint, brushed strokes.
+    pub min_confidence: f64,
 }
+
+/// The confidence below which a detection is dropped, unless a cell or
+/// the command line says otherwise (docs/vision.md, "Confidence").
+pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.15;
 
 impl Default for VisionConfig {
     fn default() -> Self {
@@ -100,6 +107,7 @@ impl Default for VisionConfig {
             samples_per_cable: 50,
             superpixel_widths: superpixels::DEFAULT_REGION_WIDTHS,
             cable_masks: true,
+            min_confidence: DEFAULT_MIN_CONFIDENCE,
         }
     }
 }

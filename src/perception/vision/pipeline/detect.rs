@@ -8,6 +8,7 @@ use std::time::Instant;
 use opencv::core::{self, Mat, Rect};
 use opencv::prelude::*;
 
+use super::confidence;
 use super::config::{InstanceMethod, MaskMethod};
 use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
@@ -62,6 +63,12 @@ impl Pipeline {
             notes.push(format!(
                 "dropped {} straight detection(s) as edges: they bend less than a {:.0} px arc, or lie within {EDGE_NOISE_SAGITTA_PX} px of straight (a straight-edge radius of 0 keeps them)",
                 found.straight_dropped, self.config.straight_edge_radius_px
+            ));
+        }
+        if found.unconfident_dropped > 0 {
+            notes.push(format!(
+                "dropped {} detection(s) less confident than {:.2} as probably not cables: short against their width, unevenly wide, or unlike the other cables' width",
+                found.unconfident_dropped, self.config.min_confidence
             ));
         }
         if found.border_dropped > 0 {
@@ -177,8 +184,20 @@ impl Pipeline {
         let to_image = ToImage::new(roi, size_px);
         let mut fitted = Vec::new();
         let mut straight_dropped = 0;
+        let mut unconfident_dropped = 0;
         let mut plain_around = None;
+        let half_widths = confidence::half_widths(mask_roi)?;
         for path in paths {
+            let confidence = confidence::confidence(
+                &half_widths,
+                &path.points_px,
+                path.length_px,
+                found.width_px,
+            );
+            if confidence < self.config.min_confidence {
+                unconfident_dropped += 1;
+                continue;
+            }
             let n = spline::control_points_for_length(path.length_px);
             let Some(mut spline) = BSpline::fit(&path.points_px, n) else {
                 continue;
@@ -207,14 +226,21 @@ impl Pipeline {
             let samples_px: Vec<_> = samples_px.into_iter().map(|p| to_image.point(p)).collect();
             let grasp_px = spline.point(0.5);
             let direction_rad = spline.grasp_direction_rad();
-            fitted.push((path, spline, samples_px, grasp_px, direction_rad));
+            fitted.push((
+                path,
+                spline,
+                samples_px,
+                grasp_px,
+                direction_rad,
+                confidence,
+            ));
         }
         timings_ms.push(("spline", ms_since(start)));
 
         let start = Instant::now();
         let thickness = (1.5 * found.width_px).ceil().max(1.0) as i32 + 2;
         let mut cables = Vec::with_capacity(fitted.len());
-        for (path, spline, samples_px, grasp_px, direction_rad) in fitted {
+        for (path, spline, samples_px, grasp_px, direction_rad, confidence) in fitted {
             let mask = if self.config.cable_masks {
                 let own = path_mask(mask_roi, &path.points_px, thickness)?;
                 Some(mask_in_image(&own, roi, full)?)
@@ -227,6 +253,7 @@ impl Pipeline {
                 grasp_px,
                 direction_rad,
                 length_px: path.length_px * to_image.length_scale(),
+                confidence,
                 mask,
             });
         }
@@ -238,6 +265,7 @@ impl Pipeline {
             cable_width_px: found.width_px * to_image.length_scale(),
             straight_dropped,
             border_dropped,
+            unconfident_dropped,
             timings_ms,
             junctions,
         })

@@ -7,9 +7,11 @@
 //! - `work_area.rs`: the region of interest and the working size, and
 //!   the map back to the image's pixels;
 //! - `straight_edge.rs`: straight detections dropped as edges;
+//! - `confidence.rs`: how much a detection looks like a cable;
 //! - `draw.rs`: paths and cables drawn as masks;
 //! - `output.rs`: what a run found ([`VisionOutput`]).
 
+mod confidence;
 mod config;
 mod detect;
 mod draw;
@@ -20,7 +22,7 @@ mod work_area;
 
 use std::time::Instant;
 
-pub use config::{InstanceMethod, MaskMethod, VisionConfig};
+pub use config::{DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, VisionConfig};
 pub(crate) use draw::draw_paths;
 pub use mask_choice::MaskNetwork;
 pub use output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};

@@ -26,6 +26,9 @@ pub struct CableInstance {
     pub direction_rad: f64,
     /// Length of the skeleton path the spline was fitted to.
     pub length_px: f64,
+    /// How much it looks like a cable, 0 to 1: long against its width,
+    /// equally wide along it, as wide as the image's other cables.
+    pub confidence: f64,
     /// This cable's pixels: CV_8U 0/255, the image's size (cables overlap
     /// at crossings); `None` unless [`VisionConfig::cable_masks`].
     #[serde(skip)]
@@ -119,6 +122,9 @@ pub struct MaskInstances {
     /// Paths dropped as running out of view too short (see
     /// [`VisionConfig::min_border_cable_length_px`]).
     pub border_dropped: usize,
+    /// Paths dropped as probably not cables (see
+    /// [`VisionConfig::min_confidence`]).
+    pub unconfident_dropped: usize,
     /// Milliseconds for "instances", "spline", and "instance_masks" when
     /// the cables' masks are drawn.
     pub timings_ms: Vec<(&'static str, f64)>,

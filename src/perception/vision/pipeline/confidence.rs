@@ -1,0 +1,155 @@
+//! How much a detection looks like a cable, from its mask alone: a cable
+//! is long against its width and equally wide along its length, as wide as
+//! the image's other cables; a splash of paint is short, a brushed stroke
+//! swells and thins. The task grasps the most confident cable, and the
+//! pipeline drops detections below [`VisionConfig::min_confidence`].
+
+use opencv::core::{self, Mat};
+use opencv::imgproc;
+use opencv::prelude::*;
+
+#[cfg(doc)]
+use super::config::VisionConfig;
+use crate::perception::vision::error::{VisionError, cv};
+
+/// Lengths, in widths, from which a detection is long enough to be a
+/// cable rather than a scrap or a splash.
+const CABLE_LENGTH_WIDTHS: f64 = 10.0;
+/// The relative spread of a cable's width along it (median absolute
+/// deviation over the median) at which its confidence halves: a rendered
+/// or photographed wire keeps its width within about a tenth.
+const WIDTH_SPREAD_HALF: f64 = 0.3;
+/// The factor off the image's typical width at which confidence halves.
+const WIDTH_RATIO_HALF: f64 = 2.0;
+
+/// The mask's distance to its nearest background pixel, per pixel
+/// (CV_32F): half the local width on a centre line.
+pub(super) fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
+    let mut distance = Mat::default();
+    imgproc::distance_transform(
+        mask,
+        &mut distance,
+        imgproc::DIST_L2,
+        imgproc::DIST_MASK_3,
+        core::CV_32F,
+    )
+    .map_err(cv("measure the mask's widths"))?;
+    Ok(distance)
+}
+
+/// The confidence in [0, 1] that the path `points_px` (in `half_widths`'
+/// pixels), `length_px` long, is a cable, when the image's cables are
+/// `typical_width_px` wide.
+pub(super) fn confidence(
+    half_widths: &Mat,
+    points_px: &[[f64; 2]],
+    length_px: f64,
+    typical_width_px: f64,
+) -> f64 {
+    let mut widths: Vec<f64> = points_px
+        .iter()
+        .filter_map(|p| {
+            let (x, y) = (p[0].round() as i32, p[1].round() as i32);
+            let half = half_widths.at_2d::<f32>(y, x).ok()?;
+            (*half > 0.0).then(|| 2.0 * f64::from(*half))
+        })
+        .collect();
+    if widths.is_empty() || !(typical_width_px > 0.0) {
+        return 0.0;
+    }
+    let width = median(&mut widths);
+    let mut deviations: Vec<f64> = widths.iter().map(|w| (w - width).abs()).collect();
+    let spread = median(&mut deviations) / width;
+    let long = (length_px / (CABLE_LENGTH_WIDTHS * width)).min(1.0);
+    let even = 0.5_f64.powf((spread / WIDTH_SPREAD_HALF).powi(2));
+    let like_others = 0.5_f64.powf((width / typical_width_px).log(WIDTH_RATIO_HALF).powi(2));
+    long * even * like_others
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+#[cfg(test)]
+mod tests {
+    use opencv::core::{CV_8UC1, Point, Scalar};
+
+    use super::*;
+
+    fn mask_with(draw: impl Fn(&mut Mat)) -> Mat {
+        let mut mask =
+            Mat::new_rows_cols_with_default(200, 300, CV_8UC1, Scalar::all(0.0)).unwrap();
+        draw(&mut mask);
+        mask
+    }
+
+    fn line(mask: &mut Mat, from: (i32, i32), to: (i32, i32), width: i32) {
+        imgproc::line(
+            mask,
+            Point::new(from.0, from.1),
+            Point::new(to.0, to.1),
+            Scalar::all(255.0),
+            width,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+    }
+
+    fn along(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
+        (0..=100)
+            .map(|i| {
+                let t = f64::from(i) / 100.0;
+                [
+                    from[0] + t * (to[0] - from[0]),
+                    from[1] + t * (to[1] - from[1]),
+                ]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_long_even_cable_is_confident_and_a_splash_or_a_swelling_stroke_is_not() {
+        let points = along([20.0, 100.0], [280.0, 100.0]);
+        let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
+        let c = confidence(&half_widths(&cable).unwrap(), &points, 260.0, 9.0);
+        assert!(c > 0.9, "{c}");
+
+        // A stroke swelling from 3 to 21 px and back.
+        let stroke = mask_with(|m| {
+            for x in (20..280).step_by(4) {
+                let w = 3 + ((f64::from(x) / 20.0).sin().abs() * 18.0) as i32;
+                line(m, (x, 100), (x + 4, 100), w);
+            }
+        });
+        let s = confidence(&half_widths(&stroke).unwrap(), &points, 260.0, 9.0);
+        assert!(s < 0.6 * c, "{s} against {c}");
+
+        // A splash: as wide as a cable, three widths long.
+        let short = along([100.0, 100.0], [127.0, 100.0]);
+        let splash = mask_with(|m| line(m, (100, 100), (127, 100), 9));
+        let p = confidence(&half_widths(&splash).unwrap(), &short, 27.0, 9.0);
+        assert!(p < 0.4, "{p}");
+
+        // Four times as wide as the image's other cables.
+        let wide = mask_with(|m| line(m, (20, 100), (280, 100), 36));
+        let w = confidence(&half_widths(&wide).unwrap(), &points, 260.0, 9.0);
+        assert!(w < 0.5 * c, "{w} against {c}");
+    }
+
+    #[test]
+    fn a_path_off_the_mask_has_no_confidence() {
+        let empty = mask_with(|_| {});
+        let points = along([20.0, 100.0], [280.0, 100.0]);
+        assert_eq!(
+            confidence(&half_widths(&empty).unwrap(), &points, 260.0, 9.0),
+            0.0
+        );
+        let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
+        assert_eq!(
+            confidence(&half_widths(&cable).unwrap(), &points, 260.0, 0.0),
+            0.0
+        );
+    }
+}
