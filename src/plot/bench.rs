@@ -1,12 +1,17 @@
-//! The bench's figure: each setting's error against its cost, the Pareto
-//! front (the settings no other beats on both) joined by a line.
+//! The bench's figure: one panel per comparison (the cell's settings,
+//! the vision's on each set of images), each setting's error against its
+//! cost, the Pareto front (the settings no other beats on both) joined by
+//! a line. Points are numbered; the legend column names them, so that no
+//! label covers another.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Axes, Figure, chart, colour, drawing_error};
+use super::{
+    Axes, Figure, LegendEntry, Sample, TITLE_SIZE, chart, colour, draw_legend, drawing_error,
+};
 
-/// One setting on the figure.
+/// One setting on a panel.
 pub struct ParetoPoint {
     pub label: String,
     pub cost: f64,
@@ -15,12 +20,25 @@ pub struct ParetoPoint {
 }
 
 /// Error against cost, front joined.
-pub struct ParetoFigure {
+pub struct ParetoPanel {
+    /// Names the panel in the legend.
     pub title: String,
     pub cost_desc: String,
     pub error_desc: String,
     pub points: Vec<ParetoPoint>,
 }
+
+/// The panels stacked on the left, the legend on the right.
+pub struct ParetoFigure {
+    pub title: String,
+    pub panels: Vec<ParetoPanel>,
+}
+
+/// Height of one panel, pixels.
+const PANEL_HEIGHT: u32 = 380;
+/// Width of the panels' column and of the legend's.
+const PANELS_WIDTH: u32 = 860;
+const LEGEND_WIDTH: u32 = 640;
 
 /// `values`' range widened by a tenth on each side (and to 1 when flat),
 /// so no point sits on an axis.
@@ -34,14 +52,25 @@ fn padded(values: impl Iterator<Item = f64> + Clone) -> std::ops::Range<f64> {
     (low - pad).min(0.0_f64.max(low - pad))..high + pad
 }
 
-impl Figure for ParetoFigure {
-    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
-        let below = area
-            .titled(&self.title, (super::FONT, super::TITLE_SIZE))
-            .map_err(drawing_error)?;
+/// A point's colour: the front's or the rest's.
+fn point_colour(point: &ParetoPoint) -> RGBColor {
+    if point.on_front {
+        colour::FUSED
+    } else {
+        colour::TRUTH
+    }
+}
+
+impl ParetoPanel {
+    /// Draws the panel on `area`, its points numbered from `first`.
+    fn draw<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        first: usize,
+    ) -> Result<(), String> {
         let label = |v: &f64| format!("{v:.2}");
         let mut chart = chart(
-            &below,
+            area,
             &Axes {
                 x: padded(self.points.iter().map(|p| p.cost)),
                 y: padded(self.points.iter().map(|p| p.error)),
@@ -62,27 +91,120 @@ impl Figure for ParetoFigure {
         chart
             .draw_series(LineSeries::new(front, colour::FUSED.stroke_width(2)))
             .map_err(drawing_error)?;
-        for point in &self.points {
-            let style = if point.on_front {
-                colour::FUSED.filled()
-            } else {
-                colour::TRUTH.filled()
-            };
+        for (k, point) in self.points.iter().enumerate() {
+            let at = (point.cost, point.error);
             chart
                 .draw_series(std::iter::once(Circle::new(
-                    (point.cost, point.error),
+                    at,
                     5,
-                    style,
+                    point_colour(point).filled(),
                 )))
                 .map_err(drawing_error)?;
+            // The number up and right of its point, offset in pixels.
+            let number = EmptyElement::at(at)
+                + Text::new(
+                    (first + k).to_string(),
+                    (6, -20),
+                    (super::FONT, super::LABEL_SIZE),
+                );
             chart
-                .draw_series(std::iter::once(Text::new(
-                    point.label.clone(),
-                    (point.cost, point.error),
-                    (super::FONT, super::TICK_SIZE),
-                )))
+                .draw_series(std::iter::once(number))
                 .map_err(drawing_error)?;
         }
         Ok(())
+    }
+}
+
+impl Figure for ParetoFigure {
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        let below = area
+            .titled(&self.title, (super::FONT, TITLE_SIZE))
+            .map_err(drawing_error)?;
+        let (panels_area, legend_area) = below.split_horizontally(PANELS_WIDTH);
+        let rows = self.panels.len().max(1);
+        let mut legend = Vec::new();
+        let mut first = 1;
+        for (panel, panel_area) in self.panels.iter().zip(panels_area.split_evenly((rows, 1))) {
+            panel.draw(&panel_area, first)?;
+            legend.push(LegendEntry::new(Sample::None, format!("{}:", panel.title)));
+            for (k, point) in panel.points.iter().enumerate() {
+                legend.push(LegendEntry::new(
+                    Sample::Dot {
+                        colour: point_colour(point),
+                    },
+                    format!("{} {}", first + k, point.label),
+                ));
+            }
+            first += panel.points.len();
+        }
+        legend.push(LegendEntry::new(
+            Sample::Line {
+                colour: colour::FUSED,
+                width: 2,
+            },
+            "the Pareto front (red points): no other is both cheaper and closer",
+        ));
+        draw_legend(&legend_area, &legend)
+    }
+
+    fn size(&self) -> (u32, u32) {
+        let panels = self.panels.len().max(1) as u32;
+        (PANELS_WIDTH + LEGEND_WIDTH, 40 + panels * PANEL_HEIGHT)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_are_numbered_on_the_panels_and_named_in_the_legend() {
+        let point = |label: &str, cost, error, on_front| ParetoPoint {
+            label: label.to_owned(),
+            cost,
+            error,
+            on_front,
+        };
+        let figure = ParetoFigure {
+            title: "bench".to_owned(),
+            panels: vec![
+                ParetoPanel {
+                    title: "cell".to_owned(),
+                    cost_desc: "s".to_owned(),
+                    error_desc: "mm".to_owned(),
+                    points: vec![
+                        point("fast", 1.0, 2.0, true),
+                        point("slow", 2.0, 3.0, false),
+                    ],
+                },
+                ParetoPanel {
+                    title: "vision".to_owned(),
+                    cost_desc: "ms".to_owned(),
+                    error_desc: "1 - DICE".to_owned(),
+                    points: vec![point("network", 30.0, 0.1, true)],
+                },
+            ],
+        };
+        assert_eq!(figure.size(), (1500, 800));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bench.svg");
+        super::super::save(&figure, &path).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        // Each text on its own line of the SVG.
+        for text in [
+            "1",
+            "2",
+            "3",
+            "1 fast",
+            "2 slow",
+            "3 network",
+            "cell:",
+            "vision:",
+        ] {
+            assert!(
+                svg.lines().any(|line| line.trim() == text),
+                "{text} missing"
+            );
+        }
     }
 }

@@ -1,65 +1,55 @@
-//! The bench: the cell's settings run on the same seeded trials, each
-//! one's error against what it costs (computation and the cell's own,
-//! simulated, time), the settings no other beats on both marked as the
-//! Pareto front; and the latency of each stage of a trial's computation.
-//! Trials are the campaign's (`run_trial`), so a bench row is what a
-//! campaign with that policy would give.
+//! The cell's settings on the campaign's seeded trials, each one's error
+//! against what it costs (computation and the cell's own, simulated,
+//! time), with the Pareto fronts; and the latency of each stage of a
+//! trial's computation. Trials are the campaign's (`run_trial`), so a
+//! bench row is what a campaign with that policy would give.
 
 use std::time::Instant;
 
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::stats::Summary;
-use super::trial::{TrialEntry, TrialOutcome, run_trial};
+use super::{StageLatency, mean, pareto_front, time_us};
+use crate::campaign::stats::Summary;
+use crate::campaign::trial::{TrialEntry, TrialOutcome, run_trial};
 use crate::cell::CellFile;
+use crate::detector::config::DetectorBackend;
 use crate::geometry::PoseError;
-use crate::orchestrator::Runner;
+use crate::orchestrator::shapes::grasp_shapes;
+use crate::orchestrator::{Command, Runner};
+use crate::perception::shape::StretchErrors;
 use crate::perception::tactile::Estimator;
+use crate::record::ShapeErrors;
 use crate::task::TaskFile;
-use crate::task::campaign_file::{Perturbations, Policy, Sensing};
+use crate::task::campaign_file::{Perturbations, Policy, Sensing, TrialStart};
 use crate::task::task_file::Tolerance;
 
-/// How many trials each setting runs, from which campaign seed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct BenchSize {
-    pub trials: usize,
-    pub seed: u64,
-    /// Repetitions of each timed stage.
-    pub repetitions: usize,
-}
+use super::BenchSize;
 
-impl BenchSize {
-    /// What the docs quote.
-    pub const FULL: BenchSize = BenchSize {
-        trials: 100,
-        seed: 1,
-        repetitions: 200,
-    };
-    /// About a minute in a release build.
-    pub const QUICK: BenchSize = BenchSize {
-        trials: 20,
-        seed: 1,
-        repetitions: 50,
-    };
-}
-
-/// One setting: a campaign policy and the task's averaging window.
+/// One setting: a campaign policy, the task's averaging window and what
+/// finds the cable at the trial's start.
 #[derive(Debug, Clone)]
 pub struct Setting {
-    /// What the setting varies: "estimator", "regrasp", "averaging".
+    /// What the setting varies: "estimator", "regrasp", "averaging",
+    /// "fusion".
     pub group: &'static str,
     pub name: String,
     pub policy: Policy,
     /// Frames averaged per tactile evaluation, if not the task's.
     pub average_frames: Option<usize>,
+    /// What finds the cable at the trial's start, if not the campaign's.
+    pub start: Option<TrialStart>,
 }
 
 /// The settings the bench compares, each varied from cablecell's policy
 /// (ridge, up to 4 regrasps towards the task's tolerance): the estimator,
 /// the regrasp budget and tolerance (a tolerance of almost nothing
-/// regrasps every time: what the in-tolerance skip saves), and the tactile
-/// averaging window.
+/// regrasps every time: what the in-tolerance skip saves), the tactile
+/// averaging window; and cablecell's policy started from the cell's camera
+/// and vision pipeline instead of the campaign's oracle, so that the
+/// camera's own shape is fused with the pad's (the oracle's shape is the
+/// true cable moved by the start offset, with a σ of 0 that the fusion
+/// trusts over any touch).
 pub fn settings() -> Vec<Setting> {
     let policy = |name: &str, estimator, max_regrasps, tolerance| Policy {
         name: name.to_owned(),
@@ -84,6 +74,7 @@ pub fn settings() -> Vec<Setting> {
         name: name.to_owned(),
         policy,
         average_frames,
+        start: None,
     };
     let mut settings = vec![
         setting(
@@ -125,6 +116,15 @@ pub fn settings() -> Vec<Setting> {
             Some(frames),
         ));
     }
+    settings.push(Setting {
+        start: Some(TrialStart::Detector),
+        ..setting(
+            "fusion",
+            "ridge, up to 4 regrasps to 0.25 mm / 0.02 rad, started from the camera",
+            policy("camera-start", Estimator::Ridge, 4, fine),
+            None,
+        )
+    });
     settings
 }
 
@@ -139,12 +139,14 @@ pub struct SettingRow {
     /// trials that grasped.
     pub final_n_mm_mean: Option<f64>,
     pub final_alpha_rad_mean: Option<f64>,
-    /// Mean distance of the fused shape from the true cable over the pad,
-    /// at the first grasp
-    /// (fusion runs at every grasp; it has no switch in the task file).
-    pub fused_shape_mm_mean: Option<f64>,
-    /// And of the camera's shape alone, for scale.
-    pub vision_shape_mm_mean: Option<f64>,
+    /// Mean distance from the true cable, at the first grasp, over the
+    /// stretch the pad holds, of the camera's shape (the detector's centre
+    /// line: fusion off), the pad's (the estimator's own curve) and the
+    /// two fused (fusion on; it runs at every grasp).
+    pub shape_on_pad: ShapeColumns,
+    /// The same over the stretches beyond the pad's ends
+    /// ([`ShapeErrors::beyond_mm`] each), the pad's curve extended.
+    pub shape_beyond_pad: ShapeColumns,
     pub regrasps_mean: f64,
     /// Computation per trial (wall clock), median.
     pub compute_ms_median: Option<f64>,
@@ -155,6 +157,33 @@ pub struct SettingRow {
     pub front_cell_time: bool,
     /// No other row is both faster to compute and closer (|n|).
     pub front_compute_time: bool,
+}
+
+/// Mean distances (mm) of each shape from the true cable over one stretch.
+#[derive(Debug, Clone, Copy, Default, Serialize, JsonSchema)]
+pub struct ShapeColumns {
+    pub vision_mm_mean: Option<f64>,
+    pub touch_mm_mean: Option<f64>,
+    pub fused_mm_mean: Option<f64>,
+}
+
+impl ShapeColumns {
+    /// Over the trials' `errors`, on the pad (`beyond` false) or beyond it.
+    fn of(errors: &[ShapeErrors], beyond: bool) -> Self {
+        let stretch = |e: Option<StretchErrors>| {
+            let e = e?;
+            Some(if beyond { e.beyond? } else { e.grasped? }.mean_mm)
+        };
+        let column = |shape: fn(&ShapeErrors) -> Option<StretchErrors>| {
+            mean(errors.iter().filter_map(|e| stretch(shape(e))))
+        };
+        ShapeColumns {
+            vision_mm_mean: column(|e| e.vision),
+            // The estimator's own curve, as the fusion takes it.
+            touch_mm_mean: column(|e| e.tactile_ridge.or(e.tactile_quadratic).or(e.tactile_linear)),
+            fused_mm_mean: column(|e| e.fused),
+        }
+    }
 }
 
 /// Runs every setting on trials 0..`size.trials` of `seed`, with the
@@ -174,10 +203,21 @@ pub fn run_settings(
             if let Some(frames) = setting.average_frames {
                 task.tactile.average_frames = frames;
             }
+            let ranges = Perturbations {
+                start: setting.start.unwrap_or(ranges.start),
+                ..ranges.clone()
+            };
             let entries: Vec<TrialEntry> = (0..size.trials)
                 .map(|index| {
-                    let entry =
-                        run_trial(&task, cell, &setting.policy, ranges, size.seed, index, None);
+                    let entry = run_trial(
+                        &task,
+                        cell,
+                        &setting.policy,
+                        &ranges,
+                        size.seed,
+                        index,
+                        None,
+                    );
                     on_trial();
                     entry
                 })
@@ -189,17 +229,12 @@ pub fn run_settings(
     rows
 }
 
-/// The campaign statistics' mean of `values`; `None` for none.
-fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
-    Summary::of(&values.collect::<Vec<_>>()).map(|s| s.mean)
-}
-
 fn row(setting: &Setting, entries: &[TrialEntry]) -> SettingRow {
     let finals: Vec<PoseError> = entries
         .iter()
         .filter_map(|e| e.grasps.last()?.error)
         .collect();
-    let shapes = || entries.iter().filter_map(|e| e.shape_errors);
+    let shapes: Vec<ShapeErrors> = entries.iter().filter_map(|e| e.shape_errors).collect();
     let compute_ms: Vec<f64> = entries.iter().map(|e| e.compute_time_s * 1e3).collect();
     let successes = entries
         .iter()
@@ -212,8 +247,8 @@ fn row(setting: &Setting, entries: &[TrialEntry]) -> SettingRow {
         success_rate: successes as f64 / entries.len().max(1) as f64,
         final_n_mm_mean: mean(finals.iter().map(|e| e.n_mm.abs())),
         final_alpha_rad_mean: mean(finals.iter().map(|e| e.alpha_rad.abs())),
-        fused_shape_mm_mean: mean(shapes().filter_map(|s| Some(s.fused?.grasped?.mean_mm))),
-        vision_shape_mm_mean: mean(shapes().filter_map(|s| Some(s.vision?.grasped?.mean_mm))),
+        shape_on_pad: ShapeColumns::of(&shapes, false),
+        shape_beyond_pad: ShapeColumns::of(&shapes, true),
         regrasps_mean: mean(
             entries
                 .iter()
@@ -244,48 +279,16 @@ fn mark_fronts(rows: &mut [SettingRow]) {
     }
 }
 
-/// Whether each (cost, error) point is on the Pareto front: no other point
-/// is at least as cheap and as accurate and better in one of the two.
-/// Equal points are both on it.
-pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
-    points
-        .iter()
-        .map(|&(cost, error)| {
-            !points
-                .iter()
-                .any(|&(c, e)| c <= cost && e <= error && (c < cost || e < error))
-        })
-        .collect()
-}
-
-/// The latency of one stage of a trial's computation.
-#[derive(Debug, Clone, Serialize, JsonSchema)]
-pub struct StageLatency {
-    pub stage: String,
-    pub median_us: f64,
-    pub p95_us: f64,
-}
-
-/// Times `f` `repetitions` times, in microseconds.
-fn time_us(name: &str, repetitions: usize, mut f: impl FnMut()) -> Option<StageLatency> {
-    let times: Vec<f64> = (0..repetitions.max(1))
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed().as_secs_f64() * 1e6
-        })
-        .collect();
-    Summary::of(&times).map(|s| StageLatency {
-        stage: name.to_owned(),
-        median_us: s.median,
-        p95_us: s.p95,
-    })
-}
-
-/// The latency of the tactile stages on a real trial's grasp (bias
-/// removal of one frame and each estimator's fit of the averaged map), of
-/// one state-machine step with the simulated devices' work (each step of
-/// a seeded run), and of a whole simulated trial's computation.
+/// The latency of the tactile stages on a real trial's grasp (each
+/// estimator's fit of the averaged map, the grasp's shapes and their
+/// fusion), of one state-machine step with the simulated devices' work
+/// (each step of seeded runs of the task on the cell as given), with two
+/// kinds of step timed apart: the detect step (on the shipped cell the
+/// simulated camera's image is rendered and the vision pipeline run on
+/// it, a hundred milliseconds where the other steps take microseconds; a
+/// campaign's trial has the oracle in its place) and the tactile reads
+/// (the one that records a grasp also fuses its shapes), and of a whole
+/// simulated trial's computation.
 pub fn stage_latencies(
     task: &TaskFile,
     cell: &CellFile,
@@ -293,17 +296,29 @@ pub fn stage_latencies(
     size: BenchSize,
 ) -> Vec<StageLatency> {
     let mut stages = Vec::new();
-    let mut step_us = Vec::new();
-    if let Ok(mut runner) = Runner::for_task(task, cell, size.seed) {
+    let (mut step_us, mut detect_us, mut read_us) = (Vec::new(), Vec::new(), Vec::new());
+    let runs = (size.repetitions / 40).max(1) as u64;
+    for seed in size.seed..size.seed + runs {
+        let Ok(mut runner) = Runner::for_task(task, cell, seed) else {
+            break;
+        };
         loop {
+            let times = match runner.pending_command() {
+                Some(Command::Detect) => &mut detect_us,
+                Some(Command::ReadTactile { .. }) => &mut read_us,
+                _ => &mut step_us,
+            };
             let start = Instant::now();
             let stepped = runner.step();
-            step_us.push(start.elapsed().as_secs_f64() * 1e6);
+            times.push(start.elapsed().as_secs_f64() * 1e6);
             if !matches!(stepped, Ok(true)) {
                 break;
             }
         }
-        let fit = &runner.plan().fit.clone();
+        if seed > size.seed {
+            continue;
+        }
+        let plan = runner.plan().clone();
         let record = runner.into_record();
         if let Some(grasp) = record.grasps.first() {
             let map = &grasp.map;
@@ -312,22 +327,41 @@ pub fn stage_latencies(
                 ("tactile fit: ridge", Estimator::Ridge),
             ] {
                 stages.extend(time_us(name, size.repetitions, || {
-                    let _ = std::hint::black_box(estimator.estimate(map, fit, None));
+                    let _ = std::hint::black_box(estimator.estimate(map, &plan.fit, None));
                 }));
+            }
+            if let Some(shapes) = &grasp.shapes {
+                let (vision, truth) = (shapes.vision.as_deref(), shapes.truth.as_deref());
+                stages.extend(time_us(
+                    "a grasp's shapes: the pad's curves, fused with the detector's centre line, against the truth",
+                    size.repetitions,
+                    || {
+                        let _ = std::hint::black_box(grasp_shapes(grasp, &plan, vision, truth));
+                    },
+                ));
             }
         }
     }
-    if let Some(s) = Summary::of(&step_us) {
-        stages.push(StageLatency {
-            stage: "state-machine step (with the simulated devices)".to_owned(),
-            median_us: s.median,
-            p95_us: s.p95,
-        });
-    }
+    stages.extend(StageLatency::of(
+        "state-machine step but detect and tactile reads (with the simulated devices)",
+        &step_us,
+    ));
+    stages.extend(StageLatency::of(
+        "tactile read step (frames, the fit, the grasp's shapes fused)",
+        &read_us,
+    ));
+    let detector = match cell.detector.backend {
+        DetectorBackend::Oracle(_) => "the oracle",
+        DetectorBackend::Vision(_) => "the camera's image rendered, the vision pipeline",
+    };
+    stages.extend(StageLatency::of(
+        format!("detect step ({detector})"),
+        &detect_us,
+    ));
     let policy = &settings()[1].policy;
     let mut index = 0;
     stages.extend(time_us(
-        "whole simulated trial (ridge, 1 regrasp)",
+        "whole simulated trial (ridge, 1 regrasp; oracle start)",
         size.repetitions.min(size.trials.max(1)),
         || {
             let _ = run_trial(task, cell, policy, ranges, size.seed, index, None);
@@ -342,24 +376,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_front_holds_the_points_no_other_beats_on_both() {
-        let points = [
-            (1.0, 5.0), // cheapest
-            (2.0, 3.0), // on the front
-            (3.0, 3.0), // as accurate as the one before, dearer: off
-            (2.5, 4.0), // beaten by (2, 3)
-            (4.0, 1.0), // most accurate
-            (4.0, 1.0), // its equal: both on
-            (5.0, 2.0), // beaten by (4, 1)
-        ];
-        assert_eq!(
-            pareto_front(&points),
-            [true, true, false, false, true, true, false]
-        );
-        assert!(pareto_front(&[]).is_empty());
-    }
-
-    #[test]
     fn a_tiny_bench_gives_a_row_per_setting_and_a_front() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let (file, task, cell) =
@@ -369,6 +385,7 @@ mod tests {
             trials: 1,
             seed: 1,
             repetitions: 1,
+            images: 1,
         };
         let all = settings();
         let chosen = [all[2].clone(), all[4].clone()];
