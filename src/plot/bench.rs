@@ -40,6 +40,21 @@ const PANEL_HEIGHT: u32 = 380;
 const PANELS_WIDTH: u32 = 860;
 const LEGEND_WIDTH: u32 = 640;
 
+/// A point's number's room, pixels.
+const NUMBER_WIDTH: i32 = 24;
+const NUMBER_HEIGHT: i32 = 18;
+
+/// Decimals that tell a range's ticks apart: two for a range of about 1,
+/// one more for each tenth as short.
+fn digits(range: &std::ops::Range<f64>) -> usize {
+    let span = range.end - range.start;
+    if span > 0.0 {
+        (1.0 - span.log10()).ceil().clamp(0.0, 6.0) as usize
+    } else {
+        2
+    }
+}
+
 /// `values`' range widened by a tenth on each side (and to 1 when flat),
 /// so no point sits on an axis.
 fn padded(values: impl Iterator<Item = f64> + Clone) -> std::ops::Range<f64> {
@@ -68,16 +83,20 @@ impl ParetoPanel {
         area: &DrawingArea<DB, Shift>,
         first: usize,
     ) -> Result<(), String> {
-        let label = |v: &f64| format!("{v:.2}");
+        let (x, y) = (
+            padded(self.points.iter().map(|p| p.cost)),
+            padded(self.points.iter().map(|p| p.error)),
+        );
+        let (x_digits, y_digits) = (digits(&x), digits(&y));
         let mut chart = chart(
             area,
             &Axes {
-                x: padded(self.points.iter().map(|p| p.cost)),
-                y: padded(self.points.iter().map(|p| p.error)),
+                x,
+                y,
                 x_desc: &self.cost_desc,
                 y_desc: &self.error_desc,
-                x_label: &label,
-                y_label: &label,
+                x_label: &|v: &f64| format!("{v:.x_digits$}"),
+                y_label: &|v: &f64| format!("{v:.y_digits$}"),
                 x_ticks: 8,
             },
         )?;
@@ -91,8 +110,20 @@ impl ParetoPanel {
         chart
             .draw_series(LineSeries::new(front, colour::FUSED.stroke_width(2)))
             .map_err(drawing_error)?;
+        // Where each number went, pixels: a number that would cover one
+        // already drawn goes below it.
+        let mut placed: Vec<(i32, i32)> = Vec::new();
         for (k, point) in self.points.iter().enumerate() {
             let at = (point.cost, point.error);
+            let (px, py) = chart.backend_coord(&at);
+            let mut offset = (6, -20);
+            while placed.iter().any(|&(x, y)| {
+                (x - (px + offset.0)).abs() < NUMBER_WIDTH
+                    && (y - (py + offset.1)).abs() < NUMBER_HEIGHT
+            }) {
+                offset.1 += NUMBER_HEIGHT;
+            }
+            placed.push((px + offset.0, py + offset.1));
             chart
                 .draw_series(std::iter::once(Circle::new(
                     at,
@@ -104,7 +135,7 @@ impl ParetoPanel {
             let number = EmptyElement::at(at)
                 + Text::new(
                     (first + k).to_string(),
-                    (6, -20),
+                    offset,
                     (super::FONT, super::LABEL_SIZE),
                 );
             chart
@@ -156,6 +187,14 @@ impl Figure for ParetoFigure {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_have_the_decimals_their_range_needs() {
+        assert_eq!(digits(&(3.3..6.1)), 1);
+        assert_eq!(digits(&(0.055..0.085)), 3);
+        assert_eq!(digits(&(55.0..92.0)), 0);
+        assert_eq!(digits(&(1.0..1.0)), 2);
+    }
 
     #[test]
     fn points_are_numbered_on_the_panels_and_named_in_the_legend() {
