@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::bench::cell::ShapeColumns;
 use cablecell::campaign::bench::vision::{
-    ImageSet, VisionBenchError, VisionRow, photographs, rendered_set, run_vision, skip_settings,
-    vision_settings,
+    ImageSet, SkipSaving, VisionBenchError, VisionRow, photographs, rendered_set, run_vision,
+    skip_saving, skip_settings, vision_settings,
 };
 use cablecell::campaign::bench::{
     BenchSize, SettingRow, StageLatency, run_settings, settings, stage_latencies,
@@ -50,6 +50,9 @@ pub struct BenchReport {
     /// any background, rendered plain ones with each skip taken and
     /// forced off, and the photographs given with `--photos`.
     vision: Vec<VisionRow>,
+    /// On the plain rendered images, each skip's time saved and the error
+    /// with and without it, image by image where it was taken.
+    skip_savings: Vec<SkipSaving>,
 }
 
 pub fn bench(quick: bool, json: bool, plot: Option<&Path>, photos: Option<&Path>) -> Status {
@@ -107,6 +110,22 @@ pub fn bench(quick: bool, json: bool, plot: Option<&Path>, photos: Option<&Path>
             ..stage.clone()
         }));
     }
+    // The plain set's rows are `skip_settings`' in order: auto, the
+    // network forced, auto on a region of interest.
+    let plain: Vec<&VisionRow> = vision
+        .iter()
+        .filter(|row| row.images == RENDERED_PLAIN)
+        .collect();
+    let skip_savings = match plain[..] {
+        [auto, forced, roi] => [
+            skip_saving("network", auto, forced),
+            skip_saving("image_outside_roi", roi, auto),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+        _ => Vec::new(),
+    };
     let report = BenchReport {
         campaign: CAMPAIGN.to_owned(),
         seed: size.seed,
@@ -116,6 +135,7 @@ pub fn bench(quick: bool, json: bool, plot: Option<&Path>, photos: Option<&Path>
         stages,
         settings: rows,
         vision,
+        skip_savings,
     };
     if let Some(path) = plot
         && let Err(error) = cablecell::plot::save(&figure(&report), path)
@@ -304,4 +324,24 @@ fn print_report(report: &BenchReport) {
     outln!(
         "● on the Pareto front of its images: no other setting is both faster (median) and closer (union DICE)."
     );
+    outln!();
+    outln!(
+        "| skip, on the images that took it | images | median ms with / without | saved ms (median) | union DICE with / without | count right with / without |"
+    );
+    outln!("|---|---|---|---|---|---|");
+    for saving in &report.skip_savings {
+        outln!(
+            "| {} ({}) | {} | {:.1} / {:.1} | {:.1} | {:.3} / {:.3} | {} / {} |",
+            saving.skip,
+            saving.images,
+            saving.image_count,
+            saving.ms_with_median,
+            saving.ms_without_median,
+            saving.ms_saved_median,
+            saving.union_dice_with_mean,
+            saving.union_dice_without_mean,
+            saving.count_right_with,
+            saving.count_right_without,
+        );
+    }
 }

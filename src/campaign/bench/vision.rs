@@ -19,7 +19,8 @@ use opencv::imgproc;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{StageLatency, pareto_front};
+use super::{StageLatency, mean, pareto_front};
+use crate::campaign::stats::Summary;
 use crate::hw::camera::{ImageError, read_image};
 use crate::perception::vision::eval::{GroundTruth, labelled_images, score, summarize};
 use crate::perception::vision::network::{DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork};
@@ -288,9 +289,74 @@ pub struct VisionRow {
     pub stages: Vec<StageLatency>,
     /// Images on which each skip was taken, by skip.
     pub skipped: BTreeMap<String, usize>,
+    /// Each image's time, error and skips, in the set's order.
+    pub per_image: Vec<ImageResult>,
     /// No other row of the same image set is both faster (median) and
     /// closer (union DICE).
     pub front: bool,
+}
+
+/// One image's run of a setting.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct ImageResult {
+    pub image: String,
+    /// As [`VisionRow::ms_median`] counts it.
+    pub ms: f64,
+    pub union_dice: f64,
+    pub count_right: bool,
+    pub skipped: Vec<String>,
+}
+
+/// A skip's time saved at equal error: on the images where a setting
+/// took it, the setting against the same setting with the skip forced
+/// off, image by image.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct SkipSaving {
+    pub skip: String,
+    /// The image set.
+    pub images: String,
+    /// Images on which the skip was taken.
+    pub image_count: usize,
+    /// Medians over those images of the time with and without the skip,
+    /// and of the time saved.
+    pub ms_with_median: f64,
+    pub ms_without_median: f64,
+    pub ms_saved_median: f64,
+    /// Mean union DICE with and without it on those images.
+    pub union_dice_with_mean: f64,
+    pub union_dice_without_mean: f64,
+    /// Those images' cables counted right, with and without it.
+    pub count_right_with: usize,
+    pub count_right_without: usize,
+}
+
+/// What `skip` saves: row `with` took it, row `without` is the same
+/// pipeline with the skip forced off, on the same images. `None` when no
+/// image took it.
+pub fn skip_saving(skip: &str, with: &VisionRow, without: &VisionRow) -> Option<SkipSaving> {
+    let pairs: Vec<(&ImageResult, &ImageResult)> = with
+        .per_image
+        .iter()
+        .zip(&without.per_image)
+        .filter(|(w, _)| w.skipped.iter().any(|s| s == skip))
+        .collect();
+    let median = |f: &dyn Fn(&(&ImageResult, &ImageResult)) -> f64| {
+        Summary::of(&pairs.iter().map(f).collect::<Vec<_>>()).map(|s| s.median)
+    };
+    let count =
+        |f: &dyn Fn(&(&ImageResult, &ImageResult)) -> bool| pairs.iter().filter(|p| f(p)).count();
+    Some(SkipSaving {
+        skip: skip.to_owned(),
+        images: with.images.clone(),
+        image_count: pairs.len(),
+        ms_with_median: median(&|(w, _)| w.ms)?,
+        ms_without_median: median(&|(_, o)| o.ms)?,
+        ms_saved_median: median(&|(w, o)| o.ms - w.ms)?,
+        union_dice_with_mean: mean(pairs.iter().map(|(w, _)| w.union_dice))?,
+        union_dice_without_mean: mean(pairs.iter().map(|(_, o)| o.union_dice))?,
+        count_right_with: count(&|(w, _)| w.count_right),
+        count_right_without: count(&|(_, o)| o.count_right),
+    })
 }
 
 /// A region of interest that holds every labelled cable of `truth` with
@@ -330,6 +396,7 @@ pub fn run_vision(
         let mut total_ms = Vec::with_capacity(set.images.len());
         let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
         let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+        let mut per_image = Vec::with_capacity(set.images.len());
         for (k, labelled) in set.images.iter().enumerate() {
             let mut pipeline = Pipeline::new(VisionConfig {
                 roi_px: if setting.roi_around_cables {
@@ -355,22 +422,34 @@ pub fn run_vision(
             for (stage, ms) in &output.timings_ms {
                 stage_ms.entry(stage).or_default().push(*ms);
             }
-            total_ms.push(
-                output
-                    .timings_ms
-                    .iter()
-                    .filter(|(stage, _)| *stage != "instance_masks")
-                    .map(|(_, ms)| ms)
-                    .sum(),
-            );
-            for skip in &output.skipped {
-                *skipped.entry(skip_name(skip).to_owned()).or_default() += 1;
+            let ms = output
+                .timings_ms
+                .iter()
+                .filter(|(stage, _)| *stage != "instance_masks")
+                .map(|(_, ms)| ms)
+                .sum();
+            total_ms.push(ms);
+            let names: Vec<String> = output
+                .skipped
+                .iter()
+                .map(|skip| skip_name(skip).to_owned())
+                .collect();
+            for name in &names {
+                *skipped.entry(name.clone()).or_default() += 1;
             }
-            scores.push(score(&output, &labelled.truth).map_err(failed)?);
+            let image_score = score(&output, &labelled.truth).map_err(failed)?;
+            per_image.push(ImageResult {
+                image: labelled.name.clone(),
+                ms,
+                union_dice: image_score.union_dice,
+                count_right: image_score.count_right,
+                skipped: names,
+            });
+            scores.push(image_score);
             on_image();
         }
         let summary = summarize(&scores);
-        let total = crate::campaign::stats::Summary::of(&total_ms);
+        let total = Summary::of(&total_ms);
         let in_us = |ms: &[f64]| ms.iter().map(|ms| ms * 1e3).collect::<Vec<_>>();
         rows.push(VisionRow {
             images: set.name.clone(),
@@ -388,6 +467,7 @@ pub fn run_vision(
                 .chain(StageLatency::of("whole pipeline", &in_us(&total_ms)))
                 .collect(),
             skipped,
+            per_image,
             front: false,
         });
     }
@@ -469,6 +549,21 @@ mod tests {
             (roi.union_dice_mean - skip.union_dice_mean).abs() < 0.05,
             "{roi:?}\n{skip:?}"
         );
+        // Image by image: the images that skipped the network, with and
+        // without the skip; the region against the whole image.
+        let network = skip_saving("network", skip, forced).unwrap();
+        assert_eq!(network.image_count, skip.skipped["network"]);
+        assert!(network.count_right_with <= network.image_count);
+        let names = |row: &VisionRow| -> Vec<String> {
+            row.per_image.iter().map(|r| r.image.clone()).collect()
+        };
+        assert_eq!(names(skip), names(forced));
+        let region = skip_saving("image_outside_roi", roi, skip);
+        assert_eq!(
+            region.map_or(0, |r| r.image_count),
+            roi.skipped.get("image_outside_roi").copied().unwrap_or(0)
+        );
+        assert!(skip_saving("cable_masks", skip, forced).is_none());
         // The region holds the cables: what is outside it is skipped where
         // it leaves some of the image out.
         let outside = |image: &LabelledImage| {
