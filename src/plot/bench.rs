@@ -44,6 +44,15 @@ const LEGEND_WIDTH: u32 = 640;
 const NUMBER_WIDTH: i32 = 24;
 const NUMBER_HEIGHT: i32 = 18;
 
+/// Where a point's number goes, its top left from the point, pixels: up
+/// right, down right, up left, down left.
+const NUMBER_PLACES: [(i32, i32); 4] = [(6, -20), (6, 4), (-28, -20), (-28, 4)];
+
+/// Those places, then the same farther out, ring after ring.
+fn number_places() -> impl Iterator<Item = (i32, i32)> {
+    (0..6).flat_map(|ring| NUMBER_PLACES.map(|(x, y)| (x, y + y.signum() * ring * NUMBER_HEIGHT)))
+}
+
 /// Decimals that tell a range's ticks apart: two for a range of about 1,
 /// one more for each tenth as short.
 fn digits(range: &std::ops::Range<f64>) -> usize {
@@ -55,15 +64,16 @@ fn digits(range: &std::ops::Range<f64>) -> usize {
     }
 }
 
-/// `values`' range widened by a tenth on each side (and to 1 when flat),
-/// so no point sits on an axis.
+/// `values`' range widened by a tenth on each side, and by at least a
+/// twentieth of its top (to 1 when flat), so that no point sits on an axis
+/// and a few points in a narrow range do not look far apart.
 fn padded(values: impl Iterator<Item = f64> + Clone) -> std::ops::Range<f64> {
     let low = values.clone().fold(f64::INFINITY, f64::min);
     let high = values.fold(f64::NEG_INFINITY, f64::max);
     if !low.is_finite() || !high.is_finite() {
         return 0.0..1.0;
     }
-    let pad = ((high - low) * 0.1).max(1e-3 * high.abs()).max(1e-9);
+    let pad = ((high - low) * 0.1).max(0.05 * high.abs()).max(1e-9);
     (low - pad).min(0.0_f64.max(low - pad))..high + pad
 }
 
@@ -111,18 +121,18 @@ impl ParetoPanel {
             .draw_series(LineSeries::new(front, colour::FUSED.stroke_width(2)))
             .map_err(drawing_error)?;
         // Where each number went, pixels: a number that would cover one
-        // already drawn goes below it.
+        // already drawn takes the next free place around its point.
         let mut placed: Vec<(i32, i32)> = Vec::new();
         for (k, point) in self.points.iter().enumerate() {
             let at = (point.cost, point.error);
             let (px, py) = chart.backend_coord(&at);
-            let mut offset = (6, -20);
-            while placed.iter().any(|&(x, y)| {
-                (x - (px + offset.0)).abs() < NUMBER_WIDTH
-                    && (y - (py + offset.1)).abs() < NUMBER_HEIGHT
-            }) {
-                offset.1 += NUMBER_HEIGHT;
-            }
+            let free = |offset: &(i32, i32)| {
+                !placed.iter().any(|&(x, y)| {
+                    (x - (px + offset.0)).abs() < NUMBER_WIDTH
+                        && (y - (py + offset.1)).abs() < NUMBER_HEIGHT
+                })
+            };
+            let offset = number_places().find(free).unwrap_or(NUMBER_PLACES[0]);
             placed.push((px + offset.0, py + offset.1));
             chart
                 .draw_series(std::iter::once(Circle::new(
