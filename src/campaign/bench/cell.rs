@@ -420,4 +420,56 @@ mod tests {
         assert!(fine.final_n_mm_mean < none.final_n_mm_mean);
         assert!(none.front_cell_time && fine.front_cell_time);
     }
+
+    #[test]
+    fn fusion_follows_the_pad_on_it_and_the_camera_beyond_unless_the_oracle_claims_to_be_exact() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let (file, task, cell) =
+            crate::task::load_campaign(&root.join("tasks/paper-regrasp-campaign.toml"))
+                .expect("the shipped campaign");
+        let size = BenchSize {
+            trials: 2,
+            seed: 1,
+            repetitions: 1,
+            images: 1,
+        };
+        let all = settings();
+        let oracle = all[1].clone();
+        let camera = all.last().expect("the fusion row").clone();
+        let rows = run_settings(
+            &task,
+            &cell,
+            &file.perturbation,
+            &[oracle, camera],
+            size,
+            || {},
+        );
+        let (oracle, camera) = (&rows[0], &rows[1]);
+        assert!(!oracle.started_from_camera && camera.started_from_camera);
+        // Each start has its own front.
+        assert!(oracle.front_cell_time && camera.front_cell_time);
+        let value = |v: Option<f64>| v.expect("a shape error");
+        // The oracle's exact σ: the fused shape is its own, however far
+        // off, and the pad's is closer.
+        let pad = &oracle.shape_on_pad;
+        assert!(
+            (value(pad.fused_mm_mean) - value(pad.vision_mm_mean)).abs() < 0.1,
+            "{pad:?}"
+        );
+        assert!(
+            value(pad.touch_mm_mean) < value(pad.vision_mm_mean),
+            "{pad:?}"
+        );
+        // The camera's σ: on the pad the fused shape follows the pad, beyond
+        // it the camera.
+        let (pad, beyond) = (&camera.shape_on_pad, &camera.shape_beyond_pad);
+        assert!(
+            value(pad.fused_mm_mean) < value(pad.vision_mm_mean),
+            "{pad:?}"
+        );
+        assert!(
+            value(beyond.fused_mm_mean) < value(beyond.touch_mm_mean),
+            "{beyond:?}"
+        );
+    }
 }
