@@ -518,7 +518,7 @@ mod tests {
     }
 
     #[test]
-    fn the_skip_saves_the_network_on_a_plain_background_at_equal_error() {
+    fn the_skips_on_a_plain_background_are_counted_and_compared_image_by_image() {
         let set = rendered_set("plain", 3, 1, BackgroundChoice::Plain).unwrap();
         let model = Path::new(DEFAULT_MODEL);
         let mut images = 0;
@@ -579,5 +579,27 @@ mod tests {
             assert!(row.union_dice_mean > 0.7, "{row:?}");
             assert!(row.stages.iter().any(|s| s.stage == "mask"), "{row:?}");
         }
+    }
+
+    #[test]
+    fn photographs_are_read_from_a_folder_in_the_cables_dev_layout() {
+        let dir = tempfile::tempdir().unwrap();
+        let empty = photographs(dir.path()).err().unwrap();
+        assert!(
+            matches!(empty, VisionBenchError::NoImages { .. }),
+            "{empty}"
+        );
+        let options = SceneOptions::default();
+        crate::sim::render::write_dataset(dir.path(), 2, 1, &options, || {}).unwrap();
+        let set = photographs(dir.path()).unwrap();
+        let names: Vec<&str> = set.images.iter().map(|i| i.name.as_str()).collect();
+        assert_eq!(names, ["00000", "00001"]);
+        for image in &set.images {
+            assert_eq!(image.truth.masks.len(), image.truth.polylines_px.len());
+        }
+        // A label that does not parse is named with its image.
+        std::fs::write(dir.path().join("00001.txt"), "3 1 2\n").unwrap();
+        let error = photographs(dir.path()).err().unwrap();
+        assert!(error.to_string().contains("00001"), "{error}");
     }
 }
