@@ -99,22 +99,31 @@ enum Command {
         figure: cli::plot::PlotCommand,
     },
     /// Run the bench: the cell's main settings (estimator, regrasp policy
-    /// and tolerance, tactile averaging) on the same seeded trials of
-    /// tasks/paper-regrasp-campaign.toml, each one's error against its
-    /// computation and cell time with the Pareto front marked, and the
-    /// latency of each stage of a trial. Run from the repository's root.
+    /// and tolerance, tactile averaging, the camera's shape fused or not)
+    /// on the same seeded trials of tasks/paper-regrasp-campaign.toml, each
+    /// one's error against its computation and cell time with the Pareto
+    /// front marked; the vision pipeline's settings (network input size,
+    /// mask and instance method) and skips on rendered images with exact
+    /// labels, error against time; and the latency of each stage. Run from
+    /// the repository's root.
     Bench {
-        /// Fewer trials (20 a setting instead of 100): about a minute in a
-        /// release build.
+        /// Fewer trials and images (20 trials a setting instead of 100, 10
+        /// rendered images instead of 40): about a minute in a release
+        /// build.
         #[arg(long)]
         quick: bool,
         /// Print the tables as JSON.
         #[arg(long)]
         json: bool,
-        /// Draw final |n| against the cell's time, the front joined, to
-        /// this file (PNG or SVG by its extension).
+        /// Draw final |n| against the cell's time and the vision's union
+        /// DICE against its time, the fronts joined, to this file (PNG or
+        /// SVG by its extension).
         #[arg(long, value_name = "FILE")]
         plot: Option<PathBuf>,
+        /// Also score the vision settings on the labelled photographs of
+        /// this folder (cables-dev's layout, e.g. /work/shared/data/cables-dev).
+        #[arg(long, value_name = "DIR")]
+        photos: Option<PathBuf>,
     },
     /// Run a campaign: many seeded trials of a task, each policy of the file
     /// on identical trials, recorded to OUT/trials.jsonl as they finish, and
@@ -374,7 +383,12 @@ fn main() -> ExitCode {
         Command::Graph { task } => cli::graph::graph(&task),
         Command::JsonSchema { output } => cli::json::json_schema(output),
         Command::Plot { figure } => cli::plot::plot(&figure),
-        Command::Bench { quick, json, plot } => cli::bench::bench(quick, json, plot.as_deref()),
+        Command::Bench {
+            quick,
+            json,
+            plot,
+            photos,
+        } => cli::bench::bench(quick, json, plot.as_deref(), photos.as_deref()),
         Command::Campaign {
             merge: Some(CampaignCommand::Merge { folders, out, json }),
             ..

@@ -162,6 +162,11 @@ impl Format {
 pub trait Figure {
     /// Draws on `area`; drawing errors come back as their text.
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String>;
+
+    /// Width and height, pixels: [`SIZE`] unless the figure needs more.
+    fn size(&self) -> (u32, u32) {
+        SIZE
+    }
 }
 
 /// A drawing error as text, whatever the backend.
@@ -169,7 +174,7 @@ pub fn drawing_error<E: std::error::Error + Send + Sync>(error: DrawingAreaError
     error.to_string()
 }
 
-/// Draws `figure` into `path`, PNG or SVG by its extension, at [`SIZE`].
+/// Draws `figure` into `path`, PNG or SVG by its extension, at its size.
 pub fn save(figure: &impl Figure, path: &Path) -> Result<(), PlotError> {
     let format = Format::of(path)?;
     register_the_font()?;
@@ -179,7 +184,7 @@ pub fn save(figure: &impl Figure, path: &Path) -> Result<(), PlotError> {
     };
     match format {
         Format::Png => {
-            let area = BitMapBackend::new(path, SIZE).into_drawing_area();
+            let area = BitMapBackend::new(path, figure.size()).into_drawing_area();
             area.fill(&BACKGROUND)
                 .map_err(drawing_error)
                 .map_err(failed)?;
@@ -187,7 +192,7 @@ pub fn save(figure: &impl Figure, path: &Path) -> Result<(), PlotError> {
             area.present().map_err(drawing_error).map_err(failed)
         }
         Format::Svg => {
-            let area = SVGBackend::new(path, SIZE).into_drawing_area();
+            let area = SVGBackend::new(path, figure.size()).into_drawing_area();
             area.fill(&BACKGROUND)
                 .map_err(drawing_error)
                 .map_err(failed)?;

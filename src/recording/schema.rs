@@ -293,6 +293,11 @@ pub struct TactileFitMessage {
     pub true_alpha_rad: Option<f64>,
     /// The paper's centroids (x, y in mm), when that estimator ran.
     pub centroids_mm: Vec<[f64; 2]>,
+    /// The condition number of the estimate's least squares (see
+    /// [`Estimate::condition`](crate::perception::tactile::Estimate::condition));
+    /// absent from recordings made before it was recorded.
+    #[serde(default)]
+    pub condition: Option<f64>,
 }
 
 impl TactileFitMessage {
@@ -437,7 +442,7 @@ const TACTILE_DV_SCHEMA: &str = schema!(
 );
 const TACTILE_FIT_SCHEMA: &str = schema!(
     "cablecell.TactileFit",
-    r#""attempt":{"type":"integer"},"estimator":{"type":"string"},"map_dv_v":{"type":"array","items":{"type":"number"},"minItems":25,"maxItems":25},"peak_dv_v":{"type":"number"},"n_mm":{"type":["number","null"]},"alpha_rad":{"type":["number","null"]},"error_n_mm":{"type":["number","null"]},"error_alpha_rad":{"type":["number","null"]},"true_n_mm":{"type":["number","null"]},"true_alpha_rad":{"type":["number","null"]},"centroids_mm":{"type":"array","items":{"type":"array","items":{"type":"number"},"minItems":2,"maxItems":2}}"#
+    r#""attempt":{"type":"integer"},"estimator":{"type":"string"},"map_dv_v":{"type":"array","items":{"type":"number"},"minItems":25,"maxItems":25},"peak_dv_v":{"type":"number"},"n_mm":{"type":["number","null"]},"alpha_rad":{"type":["number","null"]},"error_n_mm":{"type":["number","null"]},"error_alpha_rad":{"type":["number","null"]},"true_n_mm":{"type":["number","null"]},"true_alpha_rad":{"type":["number","null"]},"centroids_mm":{"type":"array","items":{"type":"array","items":{"type":"number"},"minItems":2,"maxItems":2}},"condition":{"type":["number","null"]}"#
 );
 const POSE_IN_FRAME_SCHEMA: &str = schema!(
     "foxglove.PoseInFrame",
@@ -515,6 +520,16 @@ mod tests {
             assert_eq!(schema["title"], name.as_ref());
             assert_eq!(schema["properties"]["timestamp"], time, "{name}");
         }
+    }
+
+    #[test]
+    fn a_fit_recorded_before_its_condition_number_reads_without_it() {
+        let old = r#"{"timestamp":{"sec":1,"nsec":0},"attempt":0,"estimator":"ridge",
+            "map_dv_v":[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0],"peak_dv_v":0,
+            "n_mm":null,"alpha_rad":null,"error_n_mm":null,"error_alpha_rad":null,
+            "true_n_mm":null,"true_alpha_rad":null,"centroids_mm":[]}"#;
+        let message: TactileFitMessage = serde_json::from_str(old).unwrap();
+        assert_eq!(message.condition, None);
     }
 
     #[test]

@@ -260,6 +260,7 @@ impl Recorder {
             true_n_mm: grasp.truth.as_ref().map(|t| t.line.n_mm),
             true_alpha_rad: grasp.truth.as_ref().map(|t| t.line.alpha_rad),
             centroids_mm,
+            condition: grasp.fit.as_ref().and_then(Estimate::condition),
         };
         self.write(Topic::TactileFit, grasp.t_s, &message)?;
         let wire = wire_params(timestamp, grasp, fit);

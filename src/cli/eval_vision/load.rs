@@ -1,10 +1,8 @@
 //! Reading a labelled folder: its images and their ground truth, once for
 //! every setting.
 
-use std::path::{Path, PathBuf};
-
 use cablecell::hw::camera::read_image;
-use cablecell::perception::vision::eval::GroundTruth;
+use cablecell::perception::vision::eval::{GroundTruth, labelled_images};
 
 use super::{EvalVisionArgs, Sample};
 
@@ -13,7 +11,7 @@ use super::{EvalVisionArgs, Sample};
 /// that one run lists all there is to mend.
 pub(super) fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<String>> {
     let dir = &args.dir;
-    let stems = image_stems(dir).map_err(|error| {
+    let stems = labelled_images(dir).map_err(|error| {
         vec![format!(
             "{}: cannot list the folder: {error}",
             dir.display()
@@ -68,24 +66,4 @@ pub(super) fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<Str
     } else {
         Err(errors)
     }
-}
-
-/// (stem, image path) of every image with a union mask beside it, sorted.
-fn image_stems(dir: &Path) -> std::io::Result<Vec<(String, PathBuf)>> {
-    let mut stems = Vec::new();
-    for entry in std::fs::read_dir(dir)? {
-        let path = entry?.path();
-        let is_image = path.extension().is_some_and(|e| e == "jpg" || e == "png");
-        let Some(stem) = path.file_stem().map(|s| s.to_string_lossy().into_owned()) else {
-            continue;
-        };
-        if is_image
-            && !stem.contains("_mask_")
-            && dir.join(format!("{stem}_mask_all.png")).is_file()
-        {
-            stems.push((stem, path));
-        }
-    }
-    stems.sort();
-    Ok(stems)
 }

@@ -62,4 +62,15 @@ impl Estimate {
             Estimate::Oracle { line } => *line,
         }
     }
+
+    /// The condition number of the least squares that gave the line (the
+    /// paper's line fit, or the ridge's last Gauss–Newton step); `None`
+    /// for the oracle and for a singular ridge.
+    pub fn condition(&self) -> Option<f64> {
+        match self {
+            Estimate::Centroids(fit) => Some(fit.condition.line),
+            Estimate::Ridge(fit) => fit.condition,
+            Estimate::Oracle { .. } => None,
+        }
+    }
 }

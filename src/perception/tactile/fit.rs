@@ -126,6 +126,9 @@ pub struct WireFit {
     pub intercept_n_mm: Option<f64>,
     /// `None` with fewer than 3 centroids.
     pub quadratic: Option<Quadratic>,
+    /// How well the line's and the parabola's least squares are
+    /// conditioned.
+    pub condition: FitCondition,
     /// The largest clamped Δv.
     pub peak_dv_v: f64,
     /// Taxels below their offset, clamped to 0.
@@ -134,6 +137,28 @@ pub struct WireFit {
     pub saturated_taxels: usize,
     /// NaN or infinite Δv, treated as 0 (a map built by hand).
     pub non_finite_taxels: usize,
+}
+
+/// The condition numbers (2-norm) of the least-squares fits, each that of
+/// its design matrix in the basis the fit is solved in: polynomials
+/// orthogonal over the centroids' positions in pitches, so
+/// √(largest / smallest of the basis columns' squared norms), from n and
+/// Σs² for the line and Σp₂² too for the parabola. Rounding moves a fitted
+/// coefficient by about κ · ε · the operations that made the data,
+/// relative to the data; 1 is perfect. Five centroids a pitch apart give
+/// the line √2 and the parabola √(14/5); two centroids a pitch apart 2.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, JsonSchema)]
+pub struct FitCondition {
+    pub line: f64,
+    /// `None` with fewer than 3 centroids.
+    pub quadratic: Option<f64>,
+}
+
+/// √(largest / smallest) of squared norms.
+fn condition(squared_norms: &[f64]) -> f64 {
+    let largest = squared_norms.iter().copied().fold(0.0, f64::max);
+    let smallest = squared_norms.iter().copied().fold(f64::INFINITY, f64::min);
+    (largest / smallest).sqrt()
 }
 
 /// Why no wire parameters came out of a map.
@@ -344,6 +369,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         line,
         slope_intercept,
         quadratic,
+        condition,
     } = Fits::of(&samples, direction, pitch_mm);
     let (slope_m, intercept_n_mm) = slope_intercept.unzip();
     Ok(WireFit {
@@ -355,6 +381,7 @@ pub fn fit_wire(map: &TactileMap, config: &FitConfig) -> Result<WireFit, FitErro
         slope_m,
         intercept_n_mm,
         quadratic,
+        condition,
         peak_dv_v: peak_v,
         negative_taxels: weights.negative,
         saturated_taxels: weights.saturated,
@@ -380,6 +407,7 @@ struct Fits {
     slope_intercept: Option<(f64, f64)>,
     /// `None` with fewer than 3 samples.
     quadratic: Option<Quadratic>,
+    condition: FitCondition,
 }
 
 impl Fits {
@@ -412,11 +440,16 @@ impl Fits {
             Direction::Vertical => (slope.abs() > 1e-9 * (1.0 + slope * slope).sqrt())
                 .then(|| (slope.recip(), -t0_mm / slope)),
         };
+        let line_condition = condition(&[n, s_ss]);
         if samples.len < 3 {
             return Self {
                 line,
                 slope_intercept,
                 quadratic: None,
+                condition: FitCondition {
+                    line: line_condition,
+                    quadratic: None,
+                },
             };
         }
         let alpha2 = s_sss / s_ss;
@@ -442,6 +475,10 @@ impl Fits {
                 b: b - 2.0 * a * u_mean,
                 c: pitch_mm * (a * u_mean * u_mean - b * u_mean + c),
             }),
+            condition: FitCondition {
+                line: line_condition,
+                quadratic: Some(condition(&[n, s_ss, p2_p2])),
+            },
         }
     }
 }
@@ -516,6 +553,14 @@ mod tests {
             assert_relative_eq!(coeff, 0.0, epsilon = 1e-12);
         }
         assert_relative_eq!(fit.peak_dv_v, 1.0);
+        // Five centroids at u = -2..2 pitches: n = 5, Σs² = 10, and
+        // p2 = s² - 2 gives Σp2² = 14.
+        assert_relative_eq!(fit.condition.line, 2f64.sqrt(), epsilon = 1e-12);
+        assert_relative_eq!(
+            fit.condition.quadratic.unwrap(),
+            (14.0f64 / 5.0).sqrt(),
+            epsilon = 1e-12
+        );
         assert_eq!(
             (
                 fit.negative_taxels,

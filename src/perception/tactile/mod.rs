@@ -22,8 +22,8 @@ pub mod search;
 pub use bias::{Bias, BiasEstimator, PAPER_BIAS_SAMPLES, RawFrame};
 pub use estimator::{Estimate, Estimator};
 pub use fit::{
-    CONTACT_THRESHOLD_V, Centroid, Direction, FitConfig, FitError, PAPER_PITCH_MM, Quadratic,
-    WireFit, fit_wire,
+    CONTACT_THRESHOLD_V, Centroid, Direction, FitCondition, FitConfig, FitError, PAPER_PITCH_MM,
+    Quadratic, WireFit, fit_wire,
 };
 pub use map::{
     ADC_MAX, MapError, PAD_HALF_SIDE_PITCH, TAXEL_COLS, TAXEL_COUNT, TAXEL_ROWS, TactileMap,

@@ -86,8 +86,10 @@ const OFFSET_LIMIT_PITCH: f64 = 2.0 * SQRT_2 + 2.0 * SIGMA_RANGE_PITCH.1;
 /// this cap only bounds the time on a map that is not a ridge.
 const MAX_ITERATIONS: usize = 50;
 
-/// Stop once an accepted step lowers the cost by less than this fraction.
-const RELATIVE_TOLERANCE: f64 = 1e-10;
+/// Stop once an accepted step lowers the cost by less than this fraction:
+/// what bounds how far the answer may lie from the exact least squares
+/// (tests/numerical_stress.rs derives its tolerance from it).
+pub const RELATIVE_TOLERANCE: f64 = 1e-10;
 
 const PARAMS: usize = 4;
 type Params = SVector<f64, PARAMS>;
@@ -112,6 +114,13 @@ pub struct RidgeFit {
     pub rms_residual_v: f64,
     /// Levenberg–Marquardt iterations, rejected steps included.
     pub iterations: usize,
+    /// The condition number (2-norm) of the last Gauss–Newton least
+    /// squares, that of the Jacobian (in pitches and Δv over the peak, the
+    /// σ prior's row included) at the fit: √(largest / smallest eigenvalue
+    /// of JᵀJ). Rounding moves the parameters by about κ · ε · the
+    /// operations, relative to them; `None` where JᵀJ is singular (a
+    /// parameter the map does not see).
+    pub condition: Option<f64>,
 }
 
 /// The finite taxels, coordinates in pitches, Δv divided by the peak.
@@ -156,7 +165,8 @@ pub fn fit_ridge(map: &TactileMap, config: &FitConfig) -> Result<RidgeFit, FitEr
     let samples = samples(map, peak_v);
     check_extent(map, contact_threshold_v / peak_v, peak_v)?;
 
-    let (params, squares, iterations) = levenberg_marquardt(&samples, principal_axis(&samples));
+    let (params, last, iterations) = levenberg_marquardt(&samples, principal_axis(&samples));
+    let squares = last.squares;
     let volts = |normalised: f64| (normalised * peak_v).min(f64::MAX);
     Ok(RidgeFit {
         line: LineInSensor::new(params[ALPHA], params[OFFSET] * pitch_mm),
@@ -164,7 +174,19 @@ pub fn fit_ridge(map: &TactileMap, config: &FitConfig) -> Result<RidgeFit, FitEr
         sigma_mm: params[SIGMA] * pitch_mm,
         rms_residual_v: volts((squares / samples.len as f64).sqrt()),
         iterations,
+        condition: condition(&last.jtj),
     })
+}
+
+/// √(largest / smallest eigenvalue) of the normal matrix JᵀJ: J's
+/// condition number; `None` when it is singular or not finite.
+fn condition(jtj: &Normal) -> Option<f64> {
+    if !jtj.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let eigenvalues = jtj.symmetric_eigenvalues();
+    let (smallest, largest) = (eigenvalues.min(), eigenvalues.max());
+    (smallest > 0.0).then(|| (largest / smallest).sqrt())
 }
 
 fn samples(map: &TactileMap, peak_v: f64) -> Samples {
@@ -300,9 +322,9 @@ fn project(params: &mut Params) {
 
 /// Marquardt's scaled damping with projection onto the bounds. Only steps
 /// that lower the (finite) cost are taken, so the result is finite and no
-/// worse than the start. Returns the parameters, their sum of squared
-/// taxel residuals and the iterations.
-fn levenberg_marquardt(samples: &Samples, start: Params) -> (Params, f64, usize) {
+/// worse than the start. Returns the parameters, the model's evaluation
+/// there and the iterations.
+fn levenberg_marquardt(samples: &Samples, start: Params) -> (Params, Evaluation, usize) {
     let mut params = start;
     project(&mut params);
     let mut current = evaluate(samples, &params);
@@ -336,7 +358,7 @@ fn levenberg_marquardt(samples: &Samples, start: Params) -> (Params, f64, usize)
             lambda *= 10.0;
         }
     }
-    (params, current.squares, iterations)
+    (params, current, iterations)
 }
 
 #[cfg(test)]
@@ -523,6 +545,8 @@ mod tests {
                 assert!((fit.amplitude_v - 1.0).abs() < 1e-6, "{fit:?}");
                 assert!((fit.sigma_mm - 0.55 * PITCH).abs() < 1e-6, "{fit:?}");
                 assert!(fit.rms_residual_v < 1e-7, "{fit:?}");
+                // A ridge across the pad shows every parameter.
+                assert!(fit.condition.is_some_and(|k| k < 1e3), "{fit:?}");
                 wire.add(&fit_wire(&map, &config).unwrap().line, &truth);
             }
         }
@@ -754,6 +778,10 @@ mod tests {
         let alpha = fit.line.alpha_rad;
         assert!(alpha > -FRAC_PI_2 && alpha <= FRAC_PI_2, "{fit:?}");
         assert!(fit.iterations <= MAX_ITERATIONS, "{fit:?}");
+        assert!(
+            fit.condition.is_none_or(|k| k >= 1.0 && k.is_finite()),
+            "{fit:?}"
+        );
     }
 
     proptest! {

@@ -177,6 +177,26 @@ impl GroundTruth {
     }
 }
 
+/// (stem, image path) of every image with a union mask beside it, sorted.
+pub fn labelled_images(dir: &Path) -> std::io::Result<Vec<(String, PathBuf)>> {
+    let mut stems = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let path = entry?.path();
+        let is_image = path.extension().is_some_and(|e| e == "jpg" || e == "png");
+        let Some(stem) = path.file_stem().map(|s| s.to_string_lossy().into_owned()) else {
+            continue;
+        };
+        if is_image
+            && !stem.contains("_mask_")
+            && dir.join(format!("{stem}_mask_all.png")).is_file()
+        {
+            stems.push((stem, path));
+        }
+    }
+    stems.sort();
+    Ok(stems)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

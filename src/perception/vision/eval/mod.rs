@@ -18,7 +18,7 @@ mod labels;
 mod measure;
 mod score;
 
-pub use dataset::GroundTruth;
+pub use dataset::{GroundTruth, labelled_images};
 pub use labels::{LabelConsistency, label_consistency, label_curve};
 pub use measure::distance_to_polylines;
 pub use score::{
