@@ -79,6 +79,9 @@ struct Evaluation {
     found_length_labelled: Option<LengthShare>,
     centerline_px: Option<Summary>,
     grasp_error_px: Option<Summary>,
+    /// Reported cables whose grasp point lies within 5 px of a labelled
+    /// centre line, over all images: the label-robust score.
+    grasps_near_label: Option<Rate>,
     /// Per stage, and "total": median and 95th percentile among the rest.
     stage_ms: BTreeMap<&'static str, Summary>,
     /// Each image's end-to-end time, in order; the sweep adds its later

@@ -138,6 +138,17 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
     );
     line("centerline px", &e.centerline_px);
     line("grasp error px", &e.grasp_error_px);
+    if let Some(rate) = &e.grasps_near_label {
+        outln!(
+            "  {:<22} {}/{} = {:.1} % [{:.1}, {:.1}] (95 % CI) of the reported cables, grasp point within {CENTRELINE_NEAR_PX} px of a labelled centre line",
+            "grasp near a label",
+            rate.successes,
+            rate.trials,
+            100.0 * rate.rate,
+            100.0 * rate.ci95_low,
+            100.0 * rate.ci95_high
+        );
+    }
     outln!(
         "  {:<22} classical in {}, network in {} of the images",
         "mask used",

@@ -134,6 +134,10 @@ pub(super) fn evaluate(
         found_length_labelled: length_share(&per_image, found_length_labelled),
         centerline_px: of(&|s| s.centerline_px),
         grasp_error_px: of(&|s| s.grasp_error_px),
+        grasps_near_label: Rate::wilson(
+            per_image.iter().map(|(_, s)| s.grasps_near).sum(),
+            per_image.iter().map(|(_, s)| s.predicted_count).sum(),
+        ),
         stage_ms: stage_ms
             .iter()
             .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))

@@ -34,6 +34,11 @@ pub struct ImageScore {
     /// Mean distance from each predicted grasp point to the nearest true
     /// centreline; `None` when nothing was predicted.
     pub grasp_error_px: Option<f64>,
+    /// Predicted cables whose grasp point lies within
+    /// [`CENTRELINE_NEAR_PX`] of a labelled centre line: grasps that would
+    /// hold a cable, a figure labels lying a few pixels off their wires do
+    /// not move (as the masks' DICE is moved).
+    pub grasps_near: usize,
     /// Labelled cables that no instance matches (instance DICE at least
     /// [`MATCH_MIN_DICE`]): why a count came out low.
     pub missed: Vec<Unmatched>,
@@ -253,6 +258,10 @@ pub fn score_cables(
             .iter()
             .map(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px)),
     );
+    let grasps_near = cables
+        .iter()
+        .filter(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px) <= CENTRELINE_NEAR_PX)
+        .count();
     let (mask_offset_px, union_dice_at_offset) = best_offset(union_mask, &truth.union_mask);
     let found_lines: Vec<Vec<[f64; 2]>> = cables.iter().map(|c| c.samples_px.clone()).collect();
     let (labelled_length_px, labelled_length_found_px) =
@@ -268,6 +277,7 @@ pub fn score_cables(
         truth_count,
         centerline_px,
         grasp_error_px,
+        grasps_near,
         missed,
         unlabelled,
         labelled_length_px,

@@ -91,7 +91,7 @@ pub struct VisionConfig {
 
 /// The confidence below which a detection is dropped, unless a cell or
 /// the command line says otherwise (docs/vision.md, "Confidence").
-pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.15;
+pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.45;
 
 impl Default for VisionConfig {
     fn default() -> Self {
