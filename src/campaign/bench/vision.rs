@@ -545,8 +545,11 @@ mod tests {
             (skip.union_dice_mean - forced.union_dice_mean).abs() < 0.05,
             "{skip:?}\n{forced:?}"
         );
+        // The region costs none either. It may gain: the region is worked
+        // on enlarged to the working width, where a cable cut by the border
+        // can reach the length under which it would be dropped.
         assert!(
-            (roi.union_dice_mean - skip.union_dice_mean).abs() < 0.05,
+            roi.union_dice_mean > skip.union_dice_mean - 0.05,
             "{roi:?}\n{skip:?}"
         );
         // Image by image: the images that skipped the network, with and
