@@ -127,7 +127,8 @@ pub(super) fn draw(
             let nz = (1.0 - nx * nx - ny * ny).max(0.0).sqrt();
             let diffuse = (nx * l[0] + ny * l[1] + nz * l[2]).max(0.0);
             let arc = f64::from(field.arc[i]);
-            let bare = arc < cable.metal_end_px || arc > field.length - cable.metal_end_px;
+            let bare = cable.metal_end_px > 0.0
+                && (arc < cable.metal_end_px || arc > field.length - cable.metal_end_px);
             let (colour, gloss) = if bare {
                 (METAL_BGR, METAL_GLOSS)
             } else {
