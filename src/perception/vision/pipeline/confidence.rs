@@ -54,7 +54,9 @@ pub(super) fn confidence(
             (*half > 0.0).then(|| 2.0 * f64::from(*half))
         })
         .collect();
-    if widths.is_empty() || !(typical_width_px > 0.0) {
+    // Not `<= 0.0`: a NaN width has no confidence either.
+    if widths.is_empty() || typical_width_px.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
         return 0.0;
     }
     let width = median(&mut widths);
