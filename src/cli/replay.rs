@@ -77,24 +77,23 @@ pub fn replay(
     };
     // With a cell, its detector's own settings: what the task's detect
     // state ran.
-    let (pipeline, network, settings) = match cell.map(cell_vision_detector).transpose() {
-        Ok(Some((_, vision))) => (
-            vision.pipeline(false),
-            vision.network(),
-            format!(
-                "{}'s detector",
-                cell.map_or_else(String::new, |c| c.display().to_string())
-            ),
-        ),
-        Ok(None) => (
+    let (pipeline, network, settings) = match cell {
+        None => (
             args.pipeline(false),
             args.network(),
             "the options given".to_owned(),
         ),
-        Err(error) => {
-            eprintln!("error: {error}");
-            return Status::BadInput;
-        }
+        Some(cell) => match cell_vision_detector(cell) {
+            Ok((_, vision)) => (
+                vision.pipeline(false),
+                vision.network(),
+                format!("{}'s detector", cell.display()),
+            ),
+            Err(error) => {
+                eprintln!("error: {error}");
+                return Status::BadInput;
+            }
+        },
     };
     detect_again(&recording, pipeline, network, &settings)
 }

@@ -109,9 +109,12 @@ pub struct VisionDetectorConfig {
 }
 
 impl VisionDetectorConfig {
-    /// The pipeline's settings.
-    pub fn vision(&self) -> VisionConfig {
-        VisionConfig {
+    /// The pipeline as the cell's detect state runs it; `cable_masks`:
+    /// whether to keep each cable's mask too (the cell needs grasp frames
+    /// only; a command may write the masks). `detect --cell` and `replay
+    /// --vision --cell` run this, so that they find what the task found.
+    pub fn pipeline(&self, cable_masks: bool) -> Pipeline {
+        Pipeline::new(VisionConfig {
             mask: self.mask,
             instances: self.instances,
             roi_px: self
@@ -119,20 +122,8 @@ impl VisionDetectorConfig {
                 .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
             work_width_px: self.work_width_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
-            // The cell needs grasp frames only.
-            cable_masks: false,
-            ..VisionConfig::default()
-        }
-    }
-
-    /// The pipeline as the cell's detect state runs it; `cable_masks`:
-    /// whether to keep each cable's mask too (for a command that writes
-    /// them). `detect --cell` and `replay --vision --cell` run this, so
-    /// that they find what the task found.
-    pub fn pipeline(&self, cable_masks: bool) -> Pipeline {
-        Pipeline::new(VisionConfig {
             cable_masks,
-            ..self.vision()
+            ..VisionConfig::default()
         })
     }
 

@@ -302,10 +302,34 @@ fn printed(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErr
         core::BORDER_REFLECT,
     )
     .map_err(cv("soften the print"))?;
+    to_float(&soft, "convert the paper")
+}
+
+/// An 8-bit drawing as the CV_32FC3 image the renderer works in.
+fn to_float(image: &Mat, step: &'static str) -> Result<Mat, RenderError> {
     let mut out = Mat::default();
-    soft.convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
-        .map_err(cv("convert the paper"))?;
+    image
+        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv(step))?;
     Ok(out)
+}
+
+/// `image` (CV_32FC3) under a faint mottle of `cells_x` × `cells_y` noise
+/// cells, of an amplitude drawn from `amplitude`: paper, cloth and canvas
+/// are not flat.
+fn mottled(
+    image: &Mat,
+    cells_x: i32,
+    cells_y: i32,
+    amplitude: std::ops::Range<f64>,
+    rng: &mut impl Rng,
+    step: &'static str,
+) -> Result<Mat, RenderError> {
+    let (width, height) = (image.cols(), image.rows());
+    let mottle = smooth_noise(width, height, cells_x, cells_y, 3, rng)?;
+    let mut sum = Mat::default();
+    core::scale_add(&mottle, rng.random_range(amplitude), image, &mut sum).map_err(cv(step))?;
+    Ok(sum)
 }
 
 /// A fully saturated-to-grey colour of hue `hue_deg`, saturation and value
@@ -419,16 +443,8 @@ fn sheets(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
             }
         }
     }
-    let mut out = Mat::default();
-    image
-        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
-        .map_err(cv("convert the sheets"))?;
-    // Paper and cloth are not flat: a faint mottle over everything.
-    let mottle = smooth_noise(width, height, 12, 9, 3, rng)?;
-    let mut sum = Mat::default();
-    core::scale_add(&mottle, rng.random_range(3.0..15.0), &out, &mut sum)
-        .map_err(cv("mottle the sheets"))?;
-    Ok(sum)
+    let out = to_float(&image, "convert the sheets")?;
+    mottled(&out, 12, 9, 3.0..15.0, rng, "mottle the sheets")
 }
 
 /// A paint's colour: black or white a third of the time (drip paintings
@@ -564,16 +580,9 @@ fn pollock(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErr
             }
         }
     }
-    let mut out = Mat::default();
-    image
-        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
-        .map_err(cv("convert the canvas"))?;
-    // The canvas's weave and the paint's thickness: a faint mottle.
-    let mottle = smooth_noise(width, height, 40, 30, 3, rng)?;
-    let mut sum = Mat::default();
-    core::scale_add(&mottle, rng.random_range(3.0..12.0), &out, &mut sum)
-        .map_err(cv("mottle the canvas"))?;
-    Ok(sum)
+    let out = to_float(&image, "convert the canvas")?;
+    // The canvas's weave and the paint's thickness, finer than paper's.
+    mottled(&out, 40, 30, 3.0..12.0, rng, "mottle the canvas")
 }
 
 /// A printed mosaic: the Voronoi cells of random points (OpenCV's
@@ -629,9 +638,5 @@ fn mosaic(width: i32, height: i32, rng: &mut impl Rng) -> Result<Mat, RenderErro
             .map_err(cv("grout a tile"))?;
         }
     }
-    let mut out = Mat::default();
-    image
-        .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
-        .map_err(cv("convert the mosaic"))?;
-    Ok(out)
+    to_float(&image, "convert the mosaic")
 }
