@@ -64,8 +64,22 @@ NET_W, NET_H = 320, 240
 MEAN_BGR = (0.5, 0.5, 0.5)
 STD_BGR = (0.25, 0.25, 0.25)
 
-TRAIN_IDS = list(range(0, 30))
+PHOTO_IDS = list(range(0, 45))
+# The photographs held out of training by default: the fold the project's
+# figures on photographs are measured on (`--held-out` picks another fold,
+# or none).
 HELD_OUT_IDS = list(range(30, 45))
+
+
+def id_ranges(text: str) -> list[int]:
+    """Photograph numbers from "30-44", "0-14,40" or "none"."""
+    if text == "none":
+        return []
+    ids: list[int] = []
+    for part in text.split(","):
+        low, _, high = part.partition("-")
+        ids.extend(range(int(low), int(high or low) + 1))
+    return ids
 
 
 # --------------------------------------------------------------------------
@@ -374,10 +388,15 @@ def freeze_batch_norms(model: CableNet) -> None:
 def train(args) -> CableNet:
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
-    real = load_real(args.data, TRAIN_IDS, (NET_W, NET_H))
-    synth = load_synthetic(args.synthetic, args.synthetic_count)
+    train_ids = [i for i in PHOTO_IDS if i not in args.held_out]
+    real = load_real(args.data, train_ids, (NET_W, NET_H))
+    synth = ([], [])
+    for folder in args.synthetic:
+        images, masks = load_synthetic(folder, args.synthetic_count)
+        synth[0].extend(images)
+        synth[1].extend(masks)
     busy = load_synthetic(args.busy, args.synthetic_count) if args.busy else None
-    cutouts = load_cutouts(args.data, TRAIN_IDS) if busy is not None else []
+    cutouts = load_cutouts(args.data, train_ids) if busy is not None else []
     print(f"data: {len(real[0])} real, {len(synth[0])} synthetic, {len(busy[0]) if busy else 0} busy, "
           f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
 
@@ -520,8 +539,14 @@ def main() -> int:
     parser.add_argument("--batch", type=int, default=16)
     parser.add_argument("--crop", type=int, default=160, help="side of the square training crops, in network pixels")
     parser.add_argument("--lr", type=float, default=4e-3)
-    parser.add_argument("--synthetic", type=Path, help="a folder written by `cablecell render-dataset` (required to train)")
-    parser.add_argument("--synthetic-count", type=int, default=2000, help="use at most this many rendered images")
+    parser.add_argument("--synthetic", type=Path, nargs="+",
+                        help="folders written by `cablecell render-dataset` (required to train), drawn from "
+                             "as one set")
+    parser.add_argument("--synthetic-count", type=int, default=2000,
+                        help="use at most this many rendered images of each folder")
+    parser.add_argument("--held-out", type=id_ranges, default=HELD_OUT_IDS,
+                        help="photographs of cables-dev kept out of training and measured, e.g. 30-44 "
+                             "(the default), 0-14, or none to train on all 45")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
     parser.add_argument("--busy", type=Path,
                         help="a folder written by `cablecell render-dataset --backgrounds busy`: the paper's kind "
@@ -549,7 +574,7 @@ def main() -> int:
         print(f"no data at {args.data}", file=sys.stderr)
         return 2
     float_out = args.out.with_name(f"{args.out.stem}_float.onnx")
-    if not args.eval_only and (args.synthetic is None or not args.synthetic.is_dir()):
+    if not args.eval_only and (args.synthetic is None or not all(f.is_dir() for f in args.synthetic)):
         print(f"no rendered images at {args.synthetic}: pass --synthetic DIR, made by "
               "`cablecell render-dataset DIR --count 2000 --seed 11`", file=sys.stderr)
         return 2
@@ -562,8 +587,8 @@ def main() -> int:
     thresholds = [0.3, 0.4, 0.5, 0.6, 0.7]
     summary = {}
     for name, path in (("float", float_out), ("8-bit", args.out)):
-        train_res = evaluate(path, args.data, TRAIN_IDS, thresholds)
-        held_res = evaluate(path, args.data, HELD_OUT_IDS, thresholds)
+        train_res = evaluate(path, args.data, [i for i in PHOTO_IDS if i not in args.held_out], thresholds)
+        held_res = evaluate(path, args.data, args.held_out or PHOTO_IDS, thresholds)
         print(f"{name} model {path}:")
         for t in thresholds:
             print(f"  threshold {t}: train IoU {train_res[t]['iou']:.4f} DICE {train_res[t]['dice']:.4f} | "

@@ -137,6 +137,43 @@ fn busy_scenes_are_drip_paintings_mosaics_or_print_with_metal_ended_cables() {
 }
 
 #[test]
+fn workbench_scenes_are_wood_with_a_board_over_a_cable_in_about_half() {
+    let options = SceneOptions {
+        backgrounds: BackgroundChoice::Workbench,
+        min_cables: 1,
+        max_cables: 2,
+        min_diameter_px: 3.0,
+        max_diameter_px: 8.0,
+        ..SceneOptions::default()
+    };
+    let scenes: Vec<SceneSpec> = (0..40)
+        .map(|seed| random_scene(&mut rng(seed), &options))
+        .collect();
+    assert!(scenes.iter().all(|s| s.background == Background::Wood));
+    let boarded: Vec<&SceneSpec> = scenes.iter().filter(|s| !s.occluders.is_empty()).collect();
+    assert!((10..=30).contains(&boarded.len()), "{}", boarded.len());
+    // The board hides a stretch of a cable, not all of it: its visible
+    // mask is smaller than its tube and not empty (another cable may pass
+    // under the board too).
+    for scene in boarded.iter().take(4) {
+        let out = render(scene, &mut rng(2)).unwrap();
+        let shares: Vec<f64> = out
+            .masks
+            .iter()
+            .zip(&out.visible_masks)
+            .map(|(whole, seen)| count(seen) / count(whole))
+            .collect();
+        assert!(
+            shares.iter().any(|&s| (0.2..0.99).contains(&s)),
+            "{shares:?}"
+        );
+    }
+    // Other choices put nothing in front of their cables.
+    let any = random_scene(&mut rng(3), &SceneOptions::default());
+    assert!(any.occluders.is_empty());
+}
+
+#[test]
 fn a_straight_cables_mask_is_its_tube() {
     let cable = straight([100.5, 60.5], [300.5, 60.5], 10.0, [30, 30, 30]);
     let out = render(&plain(400, 120, vec![cable]), &mut rng(1)).unwrap();

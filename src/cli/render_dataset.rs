@@ -76,6 +76,9 @@ pub enum BackgroundArg {
     /// Drip paintings, mosaics and print, cables with metal ends: the
     /// paper's kind of scene.
     Busy,
+    /// Wood, a board over a stretch of a cable in half the images: the
+    /// simulated cell's kind of scene.
+    Workbench,
 }
 
 pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
@@ -141,6 +144,7 @@ fn scene_options(args: &RenderDatasetArgs) -> Result<SceneOptions, String> {
             BackgroundArg::Cluttered => BackgroundChoice::Cluttered,
             BackgroundArg::Any => BackgroundChoice::Any,
             BackgroundArg::Busy => BackgroundChoice::Busy,
+            BackgroundArg::Workbench => BackgroundChoice::Workbench,
         },
         crossings: !args.no_crossings,
         min_diameter_px: args.min_diameter_px,

@@ -6,10 +6,11 @@ use std::path::Path;
 
 use opencv::core::{Mat, Vector};
 use opencv::imgcodecs;
+use opencv::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::{RenderError, RenderedScene, SceneOptions, cv, random_scene, render};
+use super::{RenderError, RenderedScene, SceneOptions, cv, random_scene, render, unite};
 
 /// JPEG quality of a data set's images: high enough to keep thin cables,
 /// low enough to leave the compression's artefacts a real camera's
@@ -71,14 +72,14 @@ pub fn write_scene_files(
         &rendered.bgr,
         &[imgcodecs::IMWRITE_JPEG_QUALITY, JPEG_QUALITY],
     )?;
-    for (k, mask) in rendered.masks.iter().enumerate() {
+    // What the camera sees of each cable: a board over a stretch of one
+    // hides it from the labels as from the image.
+    for (k, mask) in rendered.visible_masks.iter().enumerate() {
         write_image(&dir.join(format!("{stem}_mask_{k}.png")), mask, &[])?;
     }
-    write_image(
-        &dir.join(format!("{stem}_mask_all.png")),
-        &rendered.union_mask,
-        &[],
-    )?;
+    let (width, height) = (rendered.bgr.cols(), rendered.bgr.rows());
+    let union_mask = unite(&rendered.visible_masks, width, height)?;
+    write_image(&dir.join(format!("{stem}_mask_all.png")), &union_mask, &[])?;
     let mut text = String::new();
     for centerline in &rendered.centerlines_px {
         let points = resample(centerline, POLYLINE_SPACING_PX);

@@ -330,14 +330,7 @@ pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, Re
         .convert_to(&mut bgr, core::CV_8UC3, 1.0, 0.0)
         .map_err(cv("round the image to 8 bits"))?;
 
-    let mut union_mask = Mat::new_rows_cols_with_default(height, width, core::CV_8UC1, 0.into())
-        .map_err(cv("allocate the union mask"))?;
-    for mask in &masks {
-        let mut next = Mat::default();
-        core::bitwise_or(&union_mask, mask, &mut next, &core::no_array())
-            .map_err(cv("unite the masks"))?;
-        union_mask = next;
-    }
+    let union_mask = unite(&masks, width, height)?;
     Ok(RenderedScene {
         bgr,
         masks,
@@ -346,6 +339,19 @@ pub fn render(scene: &SceneSpec, rng: &mut impl Rng) -> Result<RenderedScene, Re
         visible_masks,
         visible_centerlines_px,
     })
+}
+
+/// The union of CV_8UC1 `masks` of `width` × `height` (all 0 for none).
+fn unite(masks: &[Mat], width: i32, height: i32) -> Result<Mat, RenderError> {
+    let mut union_mask = Mat::new_rows_cols_with_default(height, width, core::CV_8UC1, 0.into())
+        .map_err(cv("allocate the union mask"))?;
+    for mask in masks {
+        let mut next = Mat::default();
+        core::bitwise_or(&union_mask, mask, &mut next, &core::no_array())
+            .map_err(cv("unite the masks"))?;
+        union_mask = next;
+    }
+    Ok(union_mask)
 }
 
 fn check_cable(index: usize, cable: &CableSpec) -> Result<(), RenderError> {

@@ -8,7 +8,8 @@ use std::f64::consts::{PI, TAU};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
-use super::{Background, CableSpec, Light, SceneSpec, unit};
+use super::occluder::{Board, OccluderSpec, board_over};
+use super::{Background, CableSpec, Light, SceneSpec, clip_to_image, unit};
 
 /// Which backgrounds a random scene may have.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -25,6 +26,10 @@ pub enum BackgroundChoice {
     /// The paper's kind of scene: drip paintings, mosaics and print, the
     /// cables with bare metal at their ends.
     Busy,
+    /// The simulated cell's kind of scene: cables over a wooden
+    /// workbench, a board lying over a stretch of one of them in half the
+    /// images.
+    Workbench,
 }
 
 /// What random scenes may hold.
@@ -120,6 +125,7 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         BackgroundChoice::Any if rng.random_bool(0.35) => plain_background(rng),
         BackgroundChoice::Any => cluttered_background(rng),
         BackgroundChoice::Busy => BUSY[rng.random_range(0..BUSY.len())].clone(),
+        BackgroundChoice::Workbench => Background::Wood,
     };
     let busy = options.backgrounds == BackgroundChoice::Busy;
 
@@ -157,6 +163,12 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         }
     }
 
+    let occluders = if options.backgrounds == BackgroundChoice::Workbench {
+        board_over_a_cable(rng, &cables, width, height)
+    } else {
+        Vec::new()
+    };
+
     // Light from the camera's side, up to 65° off its axis.
     let off_axis = rng.random_range(0.2..1.13_f64);
     let azimuth = rng.random_range(0.0..TAU);
@@ -179,9 +191,46 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         },
         noise_sigma: rng.random_range(0.5..6.0),
         blur_sigma_px: rng.random_range(0.0..1.0),
-        occluders: Vec::new(),
+        occluders,
         marker: None,
     }
+}
+
+/// In a workbench scene, the share of images with a board over a stretch
+/// of a cable, and the share of that cable's length in view it hides.
+const BOARD_SHARE: f64 = 0.5;
+const BOARD_HIDDEN: std::ops::Range<f64> = 0.1..0.6;
+
+/// A board over a stretch of one of `cables`, in [`BOARD_SHARE`] of the
+/// calls: the simulated cell's occluder, so that the network learns that a
+/// cable ends at a board's edge and that the edge is none.
+fn board_over_a_cable(
+    rng: &mut impl Rng,
+    cables: &[CableSpec],
+    width: i32,
+    height: i32,
+) -> Vec<OccluderSpec> {
+    if cables.is_empty() || !rng.random_bool(BOARD_SHARE) {
+        return Vec::new();
+    }
+    let cable = &cables[rng.random_range(0..cables.len())];
+    let board = Board {
+        hidden_fraction: rng.random_range(BOARD_HIDDEN),
+        position: rng.random_range(0.0..=1.0),
+        bgr: near_grey(rng),
+        texture_seed: rng.random(),
+    };
+    let seen_px = clip_to_image(&cable.centerline_px, width, height);
+    board_over(&seen_px, cable.diameter_px / 2.0, &board)
+        .into_iter()
+        .collect()
+}
+
+/// A board's colour: cardboard, pressboard or painted wood, pale or dark.
+fn near_grey(rng: &mut impl Rng) -> [u8; 3] {
+    let level = rng.random_range(60.0..230.0);
+    let warmth = rng.random_range(0.0..40.0);
+    [level - warmth, level, level + warmth / 2.0].map(|c: f64| c.clamp(0.0, 255.0) as u8)
 }
 
 fn plain_background(rng: &mut impl Rng) -> Background {
