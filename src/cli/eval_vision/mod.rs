@@ -73,6 +73,9 @@ struct Evaluation {
     labels_found: Option<Rate>,
     /// Detections that match a labelled cable, over all images.
     found_labelled: Option<Rate>,
+    /// Labelled cables reported in pieces (two or more detections along
+    /// one), over all images.
+    labels_in_pieces: Option<Rate>,
     /// The labelled centre lines' length near a found one, over all images.
     labelled_length_found: Option<LengthShare>,
     /// The found centre lines' length near a labelled one, over all images.

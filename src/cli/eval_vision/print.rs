@@ -4,9 +4,9 @@
 use crate::cli::output::outln;
 use std::path::Path;
 
-use cablecell::campaign::stats::Summary;
+use cablecell::campaign::stats::{Rate, Summary};
 use cablecell::perception::vision::eval::{
-    CENTRELINE_NEAR_PX, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
+    ALONG_SHARE, CENTRELINE_NEAR_PX, ImageScore, MASK_OFFSET_SEARCH_PX, Unmatched,
 };
 
 use super::score::{found_length_labelled, labelled_length_found};
@@ -122,6 +122,7 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
             .iter()
             .map(|(stem, s)| (stem, s.predicted_count, &s.unlabelled)),
     );
+    print_in_pieces(e.labels_in_pieces.as_ref(), &e.per_image);
     print_length_share(
         "labelled length found",
         "of the labelled centre lines, near a found one",
@@ -166,6 +167,33 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
     for (stem, note) in &e.notes {
         outln!("  note: {stem}: {note}");
     }
+}
+
+/// The labelled cables found in pieces, with the images and pieces.
+fn print_in_pieces(rate: Option<&Rate>, per_image: &[(String, ImageScore)]) {
+    let Some(rate) = rate else {
+        return;
+    };
+    let listed: Vec<String> = per_image
+        .iter()
+        .flat_map(|(stem, s)| {
+            s.in_pieces
+                .iter()
+                .map(move |p| format!("{stem} #{} ({} pieces)", p.index, p.pieces))
+        })
+        .collect();
+    let list = if listed.is_empty() {
+        String::new()
+    } else {
+        format!(": {}", listed.join(", "))
+    };
+    outln!(
+        "  {:<22} {} of {} labelled cables, two or more found cables lying along one ({:.0} % of each within {CENTRELINE_NEAR_PX} px of it){list}",
+        "found in pieces",
+        rate.successes,
+        rate.trials,
+        100.0 * ALONG_SHARE
+    );
 }
 
 /// Images whose found mask moves this far (px, along either axis) to

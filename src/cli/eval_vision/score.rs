@@ -130,6 +130,10 @@ pub(super) fn evaluate(
         ),
         labels_found: matched_rate(&per_image, |s| (s.truth_count, s.missed.len())),
         found_labelled: matched_rate(&per_image, |s| (s.predicted_count, s.unlabelled.len())),
+        labels_in_pieces: Rate::wilson(
+            per_image.iter().map(|(_, s)| s.in_pieces.len()).sum(),
+            per_image.iter().map(|(_, s)| s.truth_count).sum(),
+        ),
         labelled_length_found: length_share(&per_image, labelled_length_found),
         found_length_labelled: length_share(&per_image, found_length_labelled),
         centerline_px: of(&|s| s.centerline_px),

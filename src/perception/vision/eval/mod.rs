@@ -22,6 +22,6 @@ pub use dataset::{GroundTruth, labelled_images};
 pub use labels::{LabelConsistency, label_consistency, label_curve};
 pub use measure::distance_to_polylines;
 pub use score::{
-    CENTRELINE_NEAR_PX, ImageScore, MASK_OFFSET_SEARCH_PX, MATCH_MIN_DICE, ScoreSummary, Unmatched,
-    best_offset, score, score_cables, summarize,
+    ALONG_SHARE, CENTRELINE_NEAR_PX, ImageScore, InPieces, MASK_OFFSET_SEARCH_PX, MATCH_MIN_DICE,
+    ScoreSummary, Unmatched, best_offset, score, score_cables, summarize,
 };

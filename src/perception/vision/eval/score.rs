@@ -44,6 +44,10 @@ pub struct ImageScore {
     pub missed: Vec<Unmatched>,
     /// Instances that match no labelled cable: why a count came out high.
     pub unlabelled: Vec<Unmatched>,
+    /// Labelled cables along which two or more found cables lie (see
+    /// [`ALONG_SHARE`]): one cable reported in pieces, where its mask
+    /// broke and the pieces were not joined.
+    pub in_pieces: Vec<InPieces>,
     /// Length of the labelled centre lines (px), and of it, the length
     /// within [`CENTRELINE_NEAR_PX`] of a found one: how much of the
     /// cables was found, whatever the masks' widths and the labels' offsets.
@@ -73,6 +77,11 @@ pub const CENTRELINE_NEAR_PX: f64 = 5.0;
 /// shares only the crossing with it.
 pub const MATCH_MIN_DICE: f64 = 0.15;
 
+/// A found cable lies along a labelled one when at least this share of
+/// its length lies within [`CENTRELINE_NEAR_PX`] of the labelled centre
+/// line: a piece of it, not a cable crossing it.
+pub const ALONG_SHARE: f64 = 0.8;
+
 /// How near the image border (px) a cable's mask must reach for the cable
 /// to run out of view.
 const AT_BORDER_PX: i32 = 10;
@@ -89,6 +98,35 @@ pub struct Unmatched {
     /// Its mask reaches within [`AT_BORDER_PX`] of the image border: the
     /// cable runs out of view.
     pub at_border: bool,
+}
+
+/// A labelled cable reported as several found ones.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
+pub struct InPieces {
+    /// The labelled cable's number, as in [`Unmatched::index`].
+    pub index: usize,
+    /// How many found cables lie along it.
+    pub pieces: usize,
+}
+
+/// The labelled cables (`labelled`, centre lines) along which two or more
+/// of `found` lie (see [`ALONG_SHARE`]).
+fn labels_in_pieces(found: &[Vec<[f64; 2]>], labelled: &[Vec<[f64; 2]>]) -> Vec<InPieces> {
+    labelled
+        .iter()
+        .enumerate()
+        .filter_map(|(index, label)| {
+            let pieces = found
+                .iter()
+                .filter(|line| {
+                    let (length_px, near_px) =
+                        length_near(std::slice::from_ref(line), std::slice::from_ref(label));
+                    length_px > 0.0 && near_px >= ALONG_SHARE * length_px
+                })
+                .count();
+            (pieces >= 2).then_some(InPieces { index, pieces })
+        })
+        .collect()
 }
 
 /// Whether `mask`'s pixels reach within [`AT_BORDER_PX`] of its border.
@@ -268,6 +306,7 @@ pub fn score_cables(
         length_near(&truth.polylines_px, &found_lines);
     let (found_length_px, found_length_labelled_px) =
         length_near(&found_lines, &truth.polylines_px);
+    let in_pieces = labels_in_pieces(&found_lines, &truth.polylines_px);
     Ok(ImageScore {
         union_iou,
         union_dice,
@@ -280,6 +319,7 @@ pub fn score_cables(
         grasps_near,
         missed,
         unlabelled,
+        in_pieces,
         labelled_length_px,
         labelled_length_found_px,
         found_length_px,
@@ -414,5 +454,39 @@ mod tests {
         let none = score_cables(&[], &truth.union_mask, &truth).unwrap();
         assert_eq!(none.labelled_length_found_px, 0.0);
         assert_eq!(none.found_length_px, 0.0);
+    }
+
+    #[test]
+    fn a_cable_found_in_pieces_is_named_and_one_crossing_it_is_not() {
+        let truth = drawn_truth(
+            vec![
+                vec![[10.0, 20.0], [150.0, 20.0]],
+                vec![[80.0, 5.0], [80.0, 115.0]],
+            ],
+            7,
+            0.0,
+        );
+        let cables = [
+            // The first cable in two pieces, either side of the crossing.
+            found_along([10.0, 21.0], [70.0, 21.0]),
+            found_along([90.0, 19.0], [150.0, 19.0]),
+            // The second whole, across the first.
+            found_along([80.0, 5.0], [80.0, 115.0]),
+        ];
+        let score = score_cables(&cables, &truth.union_mask, &truth).unwrap();
+        assert_eq!(
+            score.in_pieces,
+            vec![InPieces {
+                index: 0,
+                pieces: 2
+            }]
+        );
+        let whole = score_cables(
+            &[found_along([10.0, 20.0], [150.0, 20.0]), cables[2].clone()],
+            &truth.union_mask,
+            &truth,
+        )
+        .unwrap();
+        assert!(whole.in_pieces.is_empty());
     }
 }
