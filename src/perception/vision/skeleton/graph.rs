@@ -204,24 +204,35 @@ impl Graph {
         }
     }
 
-    fn degrees(&self) -> Vec<usize> {
+    /// Each merged junction's branches (by its root in `root`), counted at
+    /// the root.
+    fn degrees(&self, root: &[usize]) -> Vec<usize> {
         let mut degree = vec![0; self.nodes.len()];
         for e in self.edges.iter().filter(|e| e.alive && !e.internal) {
-            degree[e.ends[0]] += 1;
-            degree[e.ends[1]] += 1;
+            degree[root[e.ends[0]]] += 1;
+            degree[root[e.ends[1]]] += 1;
         }
         degree
     }
 
+    /// Each node as its own junction: the roots before any merge.
+    pub(super) fn unmerged(&self) -> Vec<usize> {
+        (0..self.nodes.len()).collect()
+    }
+
     /// Drops spurs (end-to-junction edges shorter than `spur_px`), shortest
-    /// first, as long as their junction keeps at least two other branches.
-    pub(super) fn prune_spurs(&mut self, spur_px: f64) {
-        let mut degree = self.degrees();
+    /// first, as long as their junction, merged as `root` says, keeps at
+    /// least two other branches. Pruned again once junctions are merged, a
+    /// spur left at one of a crossing's junctions (whose only other branch
+    /// ran into the crossing) goes too, and is not paired with a cable.
+    pub(super) fn prune_spurs(&mut self, spur_px: f64, root: &[usize]) {
+        let mut degree = self.degrees(root);
         let mut spurs: Vec<usize> = (0..self.edges.len())
             .filter(|&e| {
                 let edge = &self.edges[e];
                 let kinds = edge.ends.map(|n| self.nodes[n].kind);
-                edge.length_px < spur_px
+                edge.alive
+                    && edge.length_px < spur_px
                     && kinds.contains(&NodeKind::End)
                     && kinds.contains(&NodeKind::Junction)
             })
@@ -230,9 +241,9 @@ impl Graph {
         for e in spurs {
             let ends = self.edges[e].ends;
             let junction = if self.nodes[ends[0]].kind == NodeKind::Junction {
-                ends[0]
+                root[ends[0]]
             } else {
-                ends[1]
+                root[ends[1]]
             };
             if degree[junction] >= 3 {
                 self.edges[e].alive = false;
@@ -355,5 +366,59 @@ impl Graph {
         width_px: f64,
     ) -> [f64; 2] {
         direction_leaving(&self.outward(branch), centre, width_px)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use opencv::core::{Point, Scalar};
+    use opencv::imgproc;
+
+    use super::super::pairing::junction_branches;
+    use super::super::thin::skeleton;
+    use super::*;
+    use crate::perception::vision::mask::zeros_u8;
+
+    /// A one-pixel skeleton of `lines`, each from its first to its last
+    /// point, in a 200 × 200 mask.
+    fn graph_of(lines: &[[[i32; 2]; 2]]) -> Graph {
+        let mut mask = zeros_u8(200, 200).unwrap();
+        for [a, b] in lines {
+            let (a, b) = (Point::new(a[0], a[1]), Point::new(b[0], b[1]));
+            imgproc::line(&mut mask, a, b, Scalar::all(255.0), 1, imgproc::LINE_8, 0).unwrap();
+        }
+        let thinned = skeleton(&mask).unwrap();
+        Graph::build(thinned.grid, &thinned.pixels)
+    }
+
+    #[test]
+    fn a_spur_at_a_crossings_second_junction_goes_once_they_are_merged() {
+        // A cable down x = 50, a side run of 8 px at y = 60 that forks into
+        // two spurs: its fork keeps one spur (it needs two branches beside
+        // it), until it is merged with the cable's junction.
+        let mut graph = graph_of(&[
+            [[50, 0], [50, 150]],
+            [[51, 60], [58, 60]],
+            [[59, 59], [62, 56]],
+            [[59, 61], [62, 64]],
+        ]);
+        let (width_px, spur_px) = (6.0, 13.0);
+        graph.prune_spurs(spur_px, &graph.unmerged());
+        let spurs_alive = |graph: &Graph| {
+            graph
+                .edges
+                .iter()
+                .filter(|e| e.alive && e.length_px < spur_px)
+                .filter(|e| e.ends.iter().any(|&n| graph.nodes[n].kind == NodeKind::End))
+                .count()
+        };
+        assert_eq!(spurs_alive(&graph), 1);
+        let root = graph.merge_junctions(width_px);
+        graph.prune_spurs(spur_px, &root);
+        assert_eq!(spurs_alive(&graph), 0);
+        // The merged junction is left with the cable's two branches.
+        let branches = junction_branches(&graph, &root);
+        let counts: Vec<usize> = branches.values().map(Vec::len).collect();
+        assert_eq!(counts, vec![2], "{counts:?}");
     }
 }

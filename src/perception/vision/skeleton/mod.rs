@@ -63,8 +63,10 @@ pub fn paths_from_mask(
         width_px,
     } = thin::skeleton(mask)?;
     let mut graph = Graph::build(grid, &pixels);
-    graph.prune_spurs(SPUR_WIDTHS * width_px + SPUR_EXTRA_PX);
+    let spur_px = SPUR_WIDTHS * width_px + SPUR_EXTRA_PX;
+    graph.prune_spurs(spur_px, &graph.unmerged());
     let root = graph.merge_junctions(width_px);
+    graph.prune_spurs(spur_px, &root);
     // Branches per merged junction, and their least-cost pairing (bending,
     // and colour when the image is given).
     let junctions = pairing::junction_branches(&graph, &root).len();
@@ -83,3 +85,4 @@ pub fn paths_from_mask(
         ..found
     })
 }
+#[cfg(test)]
