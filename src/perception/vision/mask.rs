@@ -480,9 +480,13 @@ fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
 
 /// Makes the network's output a CV_8U 0/255 mask of `size`: 8-bit outputs
 /// count as cable above 127 (or above 0 when their maximum is 1, i.e. a
-/// 0/1 mask), 32-bit float outputs are probabilities cut at 0.5; an output
-/// of another size is resized first.
-pub fn binarize_network_mask(raw: &Mat, size: Size) -> Result<Mat, VisionError> {
+/// 0/1 mask), 32-bit float outputs are probabilities cut at
+/// `probability_cut`; an output of another size is resized first.
+pub fn binarize_network_mask(
+    raw: &Mat,
+    size: Size,
+    probability_cut: f64,
+) -> Result<Mat, VisionError> {
     let bad = || VisionError::BadNetworkMask {
         channels: raw.channels(),
         depth: raw.depth(),
@@ -499,7 +503,7 @@ pub fn binarize_network_mask(raw: &Mat, size: Size) -> Result<Mat, VisionError> 
                 .map_err(cv("network mask range"))?;
             if max <= 1.0 { 0.5 } else { 127.0 }
         }
-        core::CV_32F => 0.5,
+        core::CV_32F => probability_cut,
         _ => return Err(bad()),
     };
     let binary = resize_and_cut(raw, size, cut)?;
@@ -736,16 +740,18 @@ mod tests {
     fn network_masks_of_any_scale_become_0_255() {
         let size = Size::new(8, 6);
         let ones = Mat::new_rows_cols_with_default(3, 4, core::CV_8UC1, Scalar::all(1.0)).unwrap();
-        let m = binarize_network_mask(&ones, size).unwrap();
+        let m = binarize_network_mask(&ones, size, 0.5).unwrap();
         assert_eq!(m.size().unwrap(), size);
         assert_eq!(*m.at_2d::<u8>(2, 2).unwrap(), 255);
         let probs =
             Mat::new_rows_cols_with_default(6, 8, core::CV_32FC1, Scalar::all(0.3)).unwrap();
-        let m = binarize_network_mask(&probs, size).unwrap();
+        let m = binarize_network_mask(&probs, size, 0.5).unwrap();
         assert_eq!(*m.at_2d::<u8>(2, 2).unwrap(), 0);
+        let m = binarize_network_mask(&probs, size, 0.25).unwrap();
+        assert_eq!(*m.at_2d::<u8>(2, 2).unwrap(), 255);
         let three = Mat::new_rows_cols_with_default(6, 8, core::CV_8UC3, Scalar::all(0.0)).unwrap();
         assert!(matches!(
-            binarize_network_mask(&three, size),
+            binarize_network_mask(&three, size, 0.5),
             Err(VisionError::BadNetworkMask { .. })
         ));
     }

@@ -505,12 +505,23 @@ impl MaskNetwork for LazyNetwork {
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
         MaskNetwork::mask(self.load()?, bgr)
     }
+
+    fn threshold(&self) -> f64 {
+        f64::from(self.threshold)
+    }
 }
 
-/// The pipeline's view of the network: its thresholded mask.
+/// The pipeline's view of the network: its probabilities, which the
+/// pipeline cuts at [`SegmentationNet::threshold`] and which weigh each
+/// detection's confidence.
 impl MaskNetwork for SegmentationNet {
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        SegmentationNet::mask(self, bgr).map_err(|source| VisionError::Network { source })
+        self.probability(bgr)
+            .map_err(|source| VisionError::Network { source })
+    }
+
+    fn threshold(&self) -> f64 {
+        f64::from(self.threshold)
     }
 }
 

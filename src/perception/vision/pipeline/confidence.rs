@@ -1,10 +1,13 @@
-//! How much a detection looks like a cable, from its mask alone: a cable
+//! How much a detection looks like a cable, from its mask and, when the
+//! network made the mask, from how sure the network was of it: a cable
 //! is long against its width and equally wide along its length, as wide as
-//! the image's other cables; a splash of paint is short, a brushed stroke
-//! swells and thins. The task grasps the most confident cable, and the
-//! pipeline drops detections below [`VisionConfig::min_confidence`].
+//! the image's other cables, and the network marks it well above its
+//! threshold; a splash of paint is short, a brushed stroke swells and
+//! thins, and the network is less sure of either. The task grasps the most
+//! confident cable, and the pipeline drops detections below
+//! [`VisionConfig::min_confidence`].
 
-use opencv::core::{self, Mat};
+use opencv::core::{self, Mat, Size};
 use opencv::imgproc;
 use opencv::prelude::*;
 
@@ -21,6 +24,56 @@ const CABLE_LENGTH_WIDTHS: f64 = 10.0;
 const WIDTH_SPREAD_HALF: f64 = 0.3;
 /// The factor off the image's typical width at which confidence halves.
 const WIDTH_RATIO_HALF: f64 = 2.0;
+
+/// The network's probabilities of a mask (CV_32F, the mask's size) and
+/// the threshold it was cut at.
+pub(crate) struct Belief {
+    probability: Mat,
+    threshold: f64,
+}
+
+impl Belief {
+    /// The belief behind a network's raw output cut at `threshold`, resized
+    /// to `size`: `None` for an output that is already a mask (8-bit).
+    pub(super) fn of(raw: &Mat, size: Size, threshold: f64) -> Result<Option<Self>, VisionError> {
+        if raw.depth() != core::CV_32F {
+            return Ok(None);
+        }
+        let probability = if raw.size().map_err(cv("probabilities' size"))? == size {
+            raw.clone()
+        } else {
+            let mut resized = Mat::default();
+            imgproc::resize(raw, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+                .map_err(cv("resize the probabilities"))?;
+            resized
+        };
+        Ok(Some(Belief {
+            probability,
+            threshold,
+        }))
+    }
+
+    /// How far above its threshold the network's probability stands on
+    /// average along `points_px`, as a share of the way to 1: near 1 along
+    /// a cable, lower along paint it half took for one. Points off the
+    /// probabilities count as 0.
+    fn along(&self, points_px: &[[f64; 2]]) -> f64 {
+        if points_px.is_empty() || self.threshold >= 1.0 {
+            return 0.0;
+        }
+        let sum: f64 = points_px
+            .iter()
+            .map(|p| {
+                let (x, y) = (p[0].round() as i32, p[1].round() as i32);
+                self.probability
+                    .at_2d::<f32>(y, x)
+                    .map_or(0.0, |v| f64::from(*v))
+            })
+            .sum();
+        let mean = sum / points_px.len() as f64;
+        ((mean - self.threshold) / (1.0 - self.threshold)).clamp(0.0, 1.0)
+    }
+}
 
 /// The mask's distance to its nearest background pixel, per pixel
 /// (CV_32F): half the local width on a centre line.
@@ -39,9 +92,11 @@ pub(super) fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
 
 /// The confidence in [0, 1] that the path `points_px` (in `half_widths`'
 /// pixels), `length_px` long, is a cable, when the image's cables are
-/// `typical_width_px` wide.
+/// `typical_width_px` wide; with the network's `belief`, times how sure it
+/// was along the path (see [`Belief::along`]).
 pub(super) fn confidence(
     half_widths: &Mat,
+    belief: Option<&Belief>,
     points_px: &[[f64; 2]],
     length_px: f64,
     typical_width_px: f64,
@@ -65,7 +120,8 @@ pub(super) fn confidence(
     let long = (length_px / (CABLE_LENGTH_WIDTHS * width)).min(1.0);
     let even = 0.5_f64.powf((spread / WIDTH_SPREAD_HALF).powi(2));
     let like_others = 0.5_f64.powf((width / typical_width_px).log(WIDTH_RATIO_HALF).powi(2));
-    long * even * like_others
+    let believed = belief.map_or(1.0, |b| b.along(points_px));
+    long * even * like_others * believed
 }
 
 fn median(values: &mut [f64]) -> f64 {
@@ -115,7 +171,7 @@ mod tests {
     fn a_long_even_cable_is_confident_and_a_splash_or_a_swelling_stroke_is_not() {
         let points = along([20.0, 100.0], [280.0, 100.0]);
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
-        let c = confidence(&half_widths(&cable).unwrap(), &points, 260.0, 9.0);
+        let c = confidence(&half_widths(&cable).unwrap(), None, &points, 260.0, 9.0);
         assert!(c > 0.9, "{c}");
 
         // A stroke swelling from 3 to 21 px and back.
@@ -125,18 +181,18 @@ mod tests {
                 line(m, (x, 100), (x + 4, 100), w);
             }
         });
-        let s = confidence(&half_widths(&stroke).unwrap(), &points, 260.0, 9.0);
+        let s = confidence(&half_widths(&stroke).unwrap(), None, &points, 260.0, 9.0);
         assert!(s < 0.6 * c, "{s} against {c}");
 
         // A splash: as wide as a cable, three widths long.
         let short = along([100.0, 100.0], [127.0, 100.0]);
         let splash = mask_with(|m| line(m, (100, 100), (127, 100), 9));
-        let p = confidence(&half_widths(&splash).unwrap(), &short, 27.0, 9.0);
+        let p = confidence(&half_widths(&splash).unwrap(), None, &short, 27.0, 9.0);
         assert!(p < 0.4, "{p}");
 
         // Four times as wide as the image's other cables.
         let wide = mask_with(|m| line(m, (20, 100), (280, 100), 36));
-        let w = confidence(&half_widths(&wide).unwrap(), &points, 260.0, 9.0);
+        let w = confidence(&half_widths(&wide).unwrap(), None, &points, 260.0, 9.0);
         assert!(w < 0.5 * c, "{w} against {c}");
     }
 
@@ -145,13 +201,40 @@ mod tests {
         let empty = mask_with(|_| {});
         let points = along([20.0, 100.0], [280.0, 100.0]);
         assert_eq!(
-            confidence(&half_widths(&empty).unwrap(), &points, 260.0, 9.0),
+            confidence(&half_widths(&empty).unwrap(), None, &points, 260.0, 9.0),
             0.0
         );
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
         assert_eq!(
-            confidence(&half_widths(&cable).unwrap(), &points, 260.0, 0.0),
+            confidence(&half_widths(&cable).unwrap(), None, &points, 260.0, 0.0),
             0.0
         );
+    }
+
+    #[test]
+    fn a_cable_the_network_was_unsure_of_is_less_confident() {
+        let points = along([20.0, 100.0], [280.0, 100.0]);
+        let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
+        let widths = half_widths(&cable).unwrap();
+        let size = Size::new(300, 200);
+        let sure = |p: f64| {
+            let probability =
+                Mat::new_rows_cols_with_default(200, 300, core::CV_32FC1, Scalar::all(p)).unwrap();
+            Belief::of(&probability, size, 0.5).unwrap().unwrap()
+        };
+        let shape_alone = confidence(&widths, None, &points, 260.0, 9.0);
+        let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, 9.0);
+        assert!((certain - shape_alone).abs() < 1e-9);
+        // At 0.8, three fifths of the way from the threshold to 1.
+        let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, 9.0);
+        assert!((unsure - 0.6 * shape_alone).abs() < 1e-6, "{unsure}");
+        // A mask, not probabilities: no belief to weigh.
+        assert!(Belief::of(&cable, size, 0.5).unwrap().is_none());
+        // Probabilities of another size are resized to the mask's.
+        let small =
+            Mat::new_rows_cols_with_default(50, 75, core::CV_32FC1, Scalar::all(0.8)).unwrap();
+        let resized = Belief::of(&small, size, 0.5).unwrap().unwrap();
+        let at_size = confidence(&widths, Some(&resized), &points, 260.0, 9.0);
+        assert!((at_size - unsure).abs() < 1e-6, "{at_size}");
     }
 }

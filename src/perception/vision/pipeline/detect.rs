@@ -8,7 +8,7 @@ use std::time::Instant;
 use opencv::core::{self, Mat, Rect};
 use opencv::prelude::*;
 
-use super::confidence;
+use super::confidence::{self, Belief};
 use super::config::{InstanceMethod, MaskMethod};
 use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
@@ -48,6 +48,7 @@ impl Pipeline {
             mask: mask_roi,
             used: mask_used,
             background,
+            belief,
         } = choose_mask(
             &work,
             self.config.mask,
@@ -57,7 +58,7 @@ impl Pipeline {
         )?;
         timings_ms.push(("mask", ms_since(start)));
 
-        let found = self.cables_in(&work, &mask_roi, roi, full)?;
+        let found = self.cables_in(&work, &mask_roi, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -131,17 +132,19 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, full, full)
+        self.cables_in(mask, mask, None, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
-    /// `image_roi`, region `roi` of an image of extent `full`, perhaps
-    /// resized (see [`VisionConfig::work_width_px`]): what is found is given
-    /// in the image's pixels.
+    /// `image_roi` (with the network's `belief` when it made the mask),
+    /// region `roi` of an image of extent `full`, perhaps resized (see
+    /// [`VisionConfig::work_width_px`]): what is found is given in the
+    /// image's pixels.
     fn cables_in(
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
+        belief: Option<&Belief>,
         roi: Rect,
         full: Rect,
     ) -> Result<MaskInstances, VisionError> {
@@ -190,6 +193,7 @@ impl Pipeline {
         for path in paths {
             let confidence = confidence::confidence(
                 &half_widths,
+                belief,
                 &path.points_px,
                 path.length_px,
                 found.width_px,

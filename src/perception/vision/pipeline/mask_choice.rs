@@ -6,6 +6,7 @@
 use opencv::core::Mat;
 use opencv::prelude::*;
 
+use super::confidence::Belief;
 use super::config::MaskMethod;
 use crate::perception::vision::error::{VisionError, cv};
 use crate::perception::vision::mask::{self, BackgroundStats};
@@ -15,16 +16,25 @@ use crate::perception::vision::mask::{self, BackgroundStats};
 pub trait MaskNetwork {
     /// The cables' mask for a BGR 8-bit image: one channel, the image's size
     /// (or any size: it is resized), 8-bit 0/255 (or 0/1) or 32-bit float
-    /// probabilities.
+    /// probabilities. Probabilities also tell each detection's confidence
+    /// how sure the network was of it.
     fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError>;
+
+    /// The probability above which a pixel is cable, for a network that
+    /// gives probabilities.
+    fn threshold(&self) -> f64 {
+        0.5
+    }
 }
 
 /// The mask a run takes, the method that made it (`Classical` or
-/// `Network`), and the background statistics behind the choice.
+/// `Network`), the background statistics behind the choice, and the
+/// network's probabilities when it gave them.
 pub(super) struct MaskChoice {
     pub mask: Mat,
     pub used: MaskMethod,
     pub background: BackgroundStats,
+    pub belief: Option<Belief>,
 }
 
 /// The mask-choice policy, on the image as worked on (`work`, BGR):
@@ -47,7 +57,7 @@ pub(super) fn choose_mask(
 ) -> Result<MaskChoice, VisionError> {
     let background = mask::background_stats(work)?;
     let network_mask = |net: &mut dyn MaskNetwork| network_mask(net, work, min_blob_area_px);
-    let (mask, used, background) = match (method, network) {
+    let (found, used, background) = match (method, network) {
         (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
         (MaskMethod::Network, Some(net)) => (network_mask(net)?, MaskMethod::Network, background),
         (MaskMethod::Auto, Some(net)) if !background.plain => {
@@ -79,27 +89,32 @@ pub(super) fn choose_mask(
                             "plain background, but {why}, and no network given: used the classical mask, expect cables cut along their length or in pieces"
                         ));
                     }
-                    (m, MaskMethod::Classical, stats)
+                    ((m, None), MaskMethod::Classical, stats)
                 }
             }
         }
     };
+    let (mask, belief) = found;
     Ok(MaskChoice {
         mask,
         used,
         background,
+        belief,
     })
 }
 
 /// The network's mask of `work`, binarized to its size and cleaned of
-/// blobs smaller than `min_blob_area_px`.
+/// blobs smaller than `min_blob_area_px`, with its probabilities if it
+/// gave them.
 fn network_mask(
     net: &mut dyn MaskNetwork,
     work: &Mat,
     min_blob_area_px: f64,
-) -> Result<Mat, VisionError> {
+) -> Result<(Mat, Option<Belief>), VisionError> {
     let raw = net.mask(work)?;
     let size = work.size().map_err(cv("image size"))?;
-    let binary = mask::binarize_network_mask(&raw, size)?;
-    mask::clean_mask(&binary, min_blob_area_px)
+    let threshold = net.threshold();
+    let binary = mask::binarize_network_mask(&raw, size, threshold)?;
+    let belief = Belief::of(&raw, size, threshold)?;
+    Ok((mask::clean_mask(&binary, min_blob_area_px)?, belief))
 }
