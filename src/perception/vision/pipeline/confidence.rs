@@ -35,15 +35,15 @@ pub(crate) struct Belief {
 impl Belief {
     /// The belief behind a network's raw output cut at `threshold`, resized
     /// to `size`: `None` for an output that is already a mask (8-bit).
-    pub(super) fn of(raw: &Mat, size: Size, threshold: f64) -> Result<Option<Self>, VisionError> {
+    pub(super) fn of(raw: Mat, size: Size, threshold: f64) -> Result<Option<Self>, VisionError> {
         if raw.depth() != core::CV_32F {
             return Ok(None);
         }
         let probability = if raw.size().map_err(cv("probabilities' size"))? == size {
-            raw.clone()
+            raw
         } else {
             let mut resized = Mat::default();
-            imgproc::resize(raw, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+            imgproc::resize(&raw, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
                 .map_err(cv("resize the probabilities"))?;
             resized
         };
@@ -220,7 +220,7 @@ mod tests {
         let sure = |p: f64| {
             let probability =
                 Mat::new_rows_cols_with_default(200, 300, core::CV_32FC1, Scalar::all(p)).unwrap();
-            Belief::of(&probability, size, 0.5).unwrap().unwrap()
+            Belief::of(probability, size, 0.5).unwrap().unwrap()
         };
         let shape_alone = confidence(&widths, None, &points, 260.0, 9.0);
         let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, 9.0);
@@ -229,11 +229,11 @@ mod tests {
         let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, 9.0);
         assert!((unsure - 0.6 * shape_alone).abs() < 1e-6, "{unsure}");
         // A mask, not probabilities: no belief to weigh.
-        assert!(Belief::of(&cable, size, 0.5).unwrap().is_none());
+        assert!(Belief::of(cable.clone(), size, 0.5).unwrap().is_none());
         // Probabilities of another size are resized to the mask's.
         let small =
             Mat::new_rows_cols_with_default(50, 75, core::CV_32FC1, Scalar::all(0.8)).unwrap();
-        let resized = Belief::of(&small, size, 0.5).unwrap().unwrap();
+        let resized = Belief::of(small, size, 0.5).unwrap().unwrap();
         let at_size = confidence(&widths, Some(&resized), &points, 260.0, 9.0);
         assert!((at_size - unsure).abs() < 1e-6, "{at_size}");
     }

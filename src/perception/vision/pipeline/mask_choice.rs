@@ -115,6 +115,6 @@ fn network_mask(
     let size = work.size().map_err(cv("image size"))?;
     let threshold = net.threshold();
     let binary = mask::binarize_network_mask(&raw, size, threshold)?;
-    let belief = Belief::of(&raw, size, threshold)?;
+    let belief = Belief::of(raw, size, threshold)?;
     Ok((mask::clean_mask(&binary, min_blob_area_px)?, belief))
 }
