@@ -928,6 +928,78 @@ fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     ));
 }
 
+/// Stands in for a convolutional network near its input's border: it
+/// finds the red cable by its colour, and also marks a band along the top
+/// edge of whatever it is shown.
+struct RedAndTopEdge;
+
+impl MaskNetwork for RedAndTopEdge {
+    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
+        let mut red = Mat::default();
+        core::in_range(
+            bgr,
+            &Scalar::new(0.0, 0.0, 150.0, 0.0),
+            &Scalar::new(120.0, 120.0, 255.0, 0.0),
+            &mut red,
+        )
+        .expect("threshold the red cable");
+        let band = Rect::new(20, 2, bgr.cols() - 40, 8);
+        Mat::roi_mut(&mut red, band)
+            .and_then(|mut top| {
+                top.set_to(&Scalar::all(255.0), &core::no_array())
+                    .map(|_| ())
+            })
+            .expect("mark the band");
+        Ok(red)
+    }
+}
+
+#[test]
+fn the_network_sees_the_region_of_interest_with_the_image_around_it() {
+    // A red arc on a plain table, and a region of interest around its
+    // middle with the image above and below it.
+    let curve = arc_px([320.0, 700.0], 480.0, -2.0, -1.1);
+    let scene = on_gray_table(vec![cable(curve.clone(), [40, 40, 220])]);
+    let roi = Rect::new(100, 150, 440, 160);
+    let network_on = |roi_px| {
+        Pipeline::new(VisionConfig {
+            mask: MaskMethod::Network,
+            roi_px,
+            ..keep_straight()
+        })
+        .detect(&scene.bgr, Some(&mut RedAndTopEdge))
+        .expect("detect")
+    };
+    // The band along the top of what the network saw lies above the
+    // region: only the cable is found.
+    let out = network_on(Some(roi));
+    assert_eq!(out.cables.len(), 1, "{:?}", out.notes);
+    let off_drawn: Vec<f64> = out.cables[0]
+        .samples_px
+        .iter()
+        .map(|p| distance_to_polylines(*p, std::slice::from_ref(&curve)))
+        .collect();
+    assert!(off_drawn.iter().all(|&d| d < 2.5), "{off_drawn:?}");
+    // Shown the whole image, the network's band lies along the image's
+    // own top, outside the region, and is found as a cable there; the
+    // cable is found where the region's view found it: the region was
+    // cut from the network's view pixel for pixel.
+    let whole = network_on(None);
+    assert_eq!(whole.cables.len(), 2, "the band and the cable");
+    let along_whole: Vec<Vec<[f64; 2]>> =
+        whole.cables.iter().map(|c| c.samples_px.clone()).collect();
+    let off_whole: Vec<f64> = out.cables[0]
+        .samples_px
+        .iter()
+        .map(|p| distance_to_polylines(*p, &along_whole))
+        .collect();
+    let mean_px = off_whole.iter().sum::<f64>() / off_whole.len() as f64;
+    assert!(
+        mean_px < 0.3,
+        "{mean_px} px from the whole image's cable: {off_whole:?}"
+    );
+}
+
 #[test]
 fn a_doubtful_classical_mask_on_a_plain_table_gives_way_to_the_network() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);

@@ -14,7 +14,7 @@ use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
 use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 use super::straight_edge::{EDGE_NOISE_SAGITTA_PX, looks_like_edge, straight_cable};
-use super::work_area::{ToImage, clip_roi, crop, to_work_size, work_scale};
+use super::work_area::{NetworkView, ToImage, clip_roi, crop, to_work_size, work_scale};
 use super::{Pipeline, ms_since};
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::spline::{self, BSpline};
@@ -38,8 +38,13 @@ impl Pipeline {
         let image = mask::to_bgr8(bgr)?;
         let full = Rect::new(0, 0, image.cols(), image.rows());
         let roi = clip_roi(self.config.roi_px, full, &mut notes)?;
-        let cropped = crop(image, roi, full)?;
         let scale = work_scale(full.width, self.config.work_width_px);
+        let view = if self.config.mask == MaskMethod::Classical {
+            None
+        } else {
+            NetworkView::around(&image, roi, full, scale)?
+        };
+        let cropped = crop(image, roi, full)?;
         let work = to_work_size(cropped, scale)?;
         timings_ms.push(("prepare", ms_since(start)));
 
@@ -51,6 +56,7 @@ impl Pipeline {
             belief,
         } = choose_mask(
             &work,
+            view.as_ref(),
             self.config.mask,
             network,
             self.config.min_blob_area_px,

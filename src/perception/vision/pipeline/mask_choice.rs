@@ -4,10 +4,12 @@
 //! expect of it.
 
 use opencv::core::Mat;
+use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::confidence::Belief;
 use super::config::MaskMethod;
+use super::work_area::NetworkView;
 use crate::perception::vision::error::{VisionError, cv};
 use crate::perception::vision::mask::{self, BackgroundStats};
 
@@ -47,16 +49,19 @@ pub(super) struct MaskChoice {
 ///   policy's choice.
 /// - `Classical`: the classical mask.
 ///
-/// Masks are cleaned of blobs smaller than `min_blob_area_px`.
+/// The network sees `view` when given (the region of interest with the
+/// image around it), else `work`. Masks are cleaned of blobs smaller than
+/// `min_blob_area_px`.
 pub(super) fn choose_mask(
     work: &Mat,
+    view: Option<&NetworkView>,
     method: MaskMethod,
     network: Option<&mut dyn MaskNetwork>,
     min_blob_area_px: f64,
     notes: &mut Vec<String>,
 ) -> Result<MaskChoice, VisionError> {
     let background = mask::background_stats(work)?;
-    let network_mask = |net: &mut dyn MaskNetwork| network_mask(net, work, min_blob_area_px);
+    let network_mask = |net: &mut dyn MaskNetwork| network_mask(net, work, view, min_blob_area_px);
     let (found, used, background) = match (method, network) {
         (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
         (MaskMethod::Network, Some(net)) => (network_mask(net)?, MaskMethod::Network, background),
@@ -103,15 +108,33 @@ pub(super) fn choose_mask(
     })
 }
 
-/// The network's mask of `work`, binarized to its size and cleaned of
-/// blobs smaller than `min_blob_area_px`, with its probabilities if it
-/// gave them.
+/// The network's mask of `work` (seen within `view` when given),
+/// binarized to its size and cleaned of blobs smaller than
+/// `min_blob_area_px`, with its probabilities if it gave them.
 fn network_mask(
     net: &mut dyn MaskNetwork,
     work: &Mat,
+    view: Option<&NetworkView>,
     min_blob_area_px: f64,
 ) -> Result<(Mat, Option<Belief>), VisionError> {
-    let raw = net.mask(work)?;
+    let raw = match view {
+        None => net.mask(work)?,
+        Some(view) => {
+            let seen = net.mask(&view.image)?;
+            let size = view.image.size().map_err(cv("image size"))?;
+            let seen = if seen.size().map_err(cv("mask size"))? == size {
+                seen
+            } else {
+                let mut resized = Mat::default();
+                imgproc::resize(&seen, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+                    .map_err(cv("resize the network's output"))?;
+                resized
+            };
+            Mat::roi(&seen, view.region)
+                .and_then(|region| region.try_clone())
+                .map_err(cv("cut the region of interest from the network's view"))?
+        }
+    };
     let size = work.size().map_err(cv("image size"))?;
     let threshold = net.threshold();
     let binary = mask::binarize_network_mask(&raw, size, threshold)?;

@@ -58,6 +58,55 @@ pub(super) fn crop(
     ))
 }
 
+/// Around a region of interest, how much more of the image (in working
+/// pixels, each way) the network sees: a convolutional network marks
+/// things near its input's border less reliably (on the simulated cell's
+/// 360 × 110 px region, wood grain along the region's top edge), and the
+/// image around the region is the context it lacks there.
+pub(super) const NETWORK_CONTEXT_PX: f64 = 48.0;
+
+/// What the network sees for a region of interest: the region with
+/// [`NETWORK_CONTEXT_PX`] of the image around it (as much as the image
+/// has), at the working size, and where the region lies in it.
+pub(super) struct NetworkView {
+    pub image: Mat,
+    pub region: Rect,
+}
+
+impl NetworkView {
+    /// The view for region `roi` of `image` (of extent `full`), worked on
+    /// at `scale`; `None` when the region is the whole image.
+    pub(super) fn around(
+        image: &Mat,
+        roi: Rect,
+        full: Rect,
+        scale: f64,
+    ) -> Result<Option<NetworkView>, VisionError> {
+        if roi == full {
+            return Ok(None);
+        }
+        let margin = (NETWORK_CONTEXT_PX / scale).ceil() as i32;
+        let context = Rect::new(
+            roi.x - margin,
+            roi.y - margin,
+            roi.width + 2 * margin,
+            roi.height + 2 * margin,
+        ) & full;
+        let seen = to_work_size(crop(Cow::Borrowed(image), context, full)?, scale)?;
+        let at = |offset: i32, side: i32, room: i32| {
+            let start = ((f64::from(offset) * scale).round() as i32).clamp(0, room - 1);
+            let len = ((f64::from(side) * scale).round() as i32).clamp(1, room - start);
+            (start, len)
+        };
+        let (x, width) = at(roi.x - context.x, roi.width, seen.cols());
+        let (y, height) = at(roi.y - context.y, roi.height, seen.rows());
+        Ok(Some(NetworkView {
+            image: seen.into_owned(),
+            region: Rect::new(x, y, width, height),
+        }))
+    }
+}
+
 /// Maps pixels of the image as worked on (the region of interest, perhaps
 /// resized) to the full image's pixels, whose centres are at whole
 /// coordinates in both.
