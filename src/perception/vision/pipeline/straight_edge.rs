@@ -22,16 +22,28 @@ const EDGE_MAX_SAGITTA_PX: f64 = 3.0;
 /// (0.6 to 1.7 px in cables-dev; its wire pieces depart 2.2 px or more).
 pub(super) const EDGE_NOISE_SAGITTA_PX: f64 = 1.5;
 
-/// Whether a detection (points along it, `length_px` long) is straight
-/// enough to be an edge (never when `radius_px` is 0): within
+/// The share of an edge's detection, at each end, that may hook away
+/// from the edge: where a folder's edge meets its corner, the detection
+/// turns along the other edge for a few widths.
+const EDGE_HOOK_SHARE: f64 = 0.1;
+
+/// Whether a detection (points along it, evenly spaced, `length_px` long)
+/// is straight enough to be an edge (never when `radius_px` is 0): within
 /// [`EDGE_MAX_SAGITTA_PX`] of its chord and bending less than an arc of
-/// `radius_px`, or within [`EDGE_NOISE_SAGITTA_PX`] of its chord.
+/// `radius_px`, or within [`EDGE_NOISE_SAGITTA_PX`] of its chord; or so
+/// between hooks at its ends (see [`EDGE_HOOK_SHARE`]), judged by the bend
+/// alone, since a piece of a bending cable is as near its own chord.
 pub(super) fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px: f64) -> bool {
-    let sagitta_px = spline::chord_sagitta_px(points_px);
+    let bends_less = |points: &[[f64; 2]], length_px: f64| {
+        let sagitta_px = spline::chord_sagitta_px(points);
+        sagitta_px < EDGE_MAX_SAGITTA_PX && spline::arc_radius_px(length_px, sagitta_px) > radius_px
+    };
+    let hook = (EDGE_HOOK_SHARE * points_px.len() as f64).round() as usize;
+    let middle = &points_px[hook..points_px.len() - hook];
     radius_px > 0.0
-        && sagitta_px < EDGE_MAX_SAGITTA_PX
-        && (sagitta_px < EDGE_NOISE_SAGITTA_PX
-            || spline::arc_radius_px(length_px, sagitta_px) > radius_px)
+        && (spline::chord_sagitta_px(points_px) < EDGE_NOISE_SAGITTA_PX
+            || bends_less(points_px, length_px)
+            || bends_less(middle, (1.0 - 2.0 * EDGE_HOOK_SHARE) * length_px))
 }
 
 /// On a background plain around each pixel, a straight detection is a
@@ -155,5 +167,23 @@ mod tests {
         assert!(edge(piece(70.0, 500.0), 1500.0));
         // 110 px, 2.5 px from straight: a piece of cable.
         assert!(!edge(piece(110.0, 600.0), 1500.0));
+        // 300 px straight, hooking off along a corner for its last 30 px:
+        // an edge; a cable's arc as long and hooked alike is none.
+        let hooked = |(mut points, length_px): (Vec<[f64; 2]>, f64)| {
+            let end = *points.last().unwrap();
+            let step = length_px / (points.len() - 1) as f64;
+            let more = (30.0 / step).round() as usize;
+            for k in 1..=more {
+                let along = k as f64 * step * std::f64::consts::FRAC_1_SQRT_2;
+                points.push([end[0] + along, end[1] + along]);
+            }
+            let n = points.len();
+            let resampled: Vec<[f64; 2]> = (0..50).map(|i| points[i * (n - 1) / 49]).collect();
+            (resampled, length_px + 30.0)
+        };
+        assert!(!edge(hooked(piece(300.0, 1e9)), 0.0));
+        assert!(!looks_like_edge(&hooked(piece(300.0, 1e9)).0, 330.0, 1e12));
+        assert!(edge(hooked(piece(300.0, 1e9)), 1500.0));
+        assert!(!edge(hooked(piece(300.0, 1000.0)), 1500.0));
     }
 }
