@@ -58,6 +58,8 @@ pub struct VisionConfig {
     /// Paths that run out of the region worked on and are shorter than
     /// this are dropped too: too little of such a cable is in view to
     /// grasp it, and the middle of what is seen is not the cable's middle.
+    /// The network marks a cable's bare metal end as cable, so the length
+    /// takes in a ferrule of up to 10 px beside 80 px of insulation.
     pub min_border_cable_length_px: f64,
     /// Paths straighter than an arc of this radius (px), and within 3 px
     /// of straight, are dropped, as are paths within 1.5 px of straight
@@ -101,7 +103,7 @@ impl Default for VisionConfig {
             work_width_px: 640,
             roi_px: None,
             min_cable_length_px: 40.0,
-            min_border_cable_length_px: 80.0,
+            min_border_cable_length_px: 90.0,
             straight_edge_radius_px: 1500.0,
             min_blob_area_px: 80.0,
             samples_per_cable: 50,
