@@ -85,4 +85,3 @@ pub fn paths_from_mask(
         ..found
     })
 }
-#[cfg(test)]
