@@ -446,7 +446,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{printed}"
     );
     assert!(
-        printed.contains("note: 00002: dropped 1 cable(s) that run out of view shorter than 80 px"),
+        printed.contains("note: 00002: dropped 1 cable(s) that run out of view shorter than 90 px"),
         "{printed}"
     );
 }
