@@ -514,6 +514,18 @@ pub fn binarize_network_mask(
     Ok(out)
 }
 
+/// `image` resized bilinearly to `size`, or itself when it is that size
+/// already: a network's output brought to the image it was run on.
+pub fn at_size(image: Mat, size: Size) -> Result<Mat, VisionError> {
+    if image.size().map_err(cv("image size"))? == size {
+        return Ok(image);
+    }
+    let mut resized = Mat::default();
+    imgproc::resize(&image, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
+        .map_err(cv("resize the network's output"))?;
+    Ok(resized)
+}
+
 /// `mask` resized bilinearly to `size` (when it is not that size already)
 /// and cut: 255 above `cut`, 0 elsewhere, in `mask`'s depth. Bilinear
 /// resizing then cutting at half keeps a mask's edges smooth.

@@ -14,6 +14,7 @@ use opencv::prelude::*;
 #[cfg(doc)]
 use super::config::VisionConfig;
 use crate::perception::vision::error::{VisionError, cv};
+use crate::perception::vision::mask;
 
 /// Lengths, in widths, from which a detection is long enough to be a
 /// cable rather than a scrap or a splash.
@@ -39,16 +40,8 @@ impl Belief {
         if raw.depth() != core::CV_32F {
             return Ok(None);
         }
-        let probability = if raw.size().map_err(cv("probabilities' size"))? == size {
-            raw
-        } else {
-            let mut resized = Mat::default();
-            imgproc::resize(&raw, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
-                .map_err(cv("resize the probabilities"))?;
-            resized
-        };
         Ok(Some(Belief {
-            probability,
+            probability: mask::at_size(raw, size)?,
             threshold,
         }))
     }

@@ -4,7 +4,6 @@
 //! expect of it.
 
 use opencv::core::Mat;
-use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::confidence::Belief;
@@ -120,16 +119,8 @@ fn network_mask(
     let raw = match view {
         None => net.mask(work)?,
         Some(view) => {
-            let seen = net.mask(&view.image)?;
             let size = view.image.size().map_err(cv("image size"))?;
-            let seen = if seen.size().map_err(cv("mask size"))? == size {
-                seen
-            } else {
-                let mut resized = Mat::default();
-                imgproc::resize(&seen, &mut resized, size, 0.0, 0.0, imgproc::INTER_LINEAR)
-                    .map_err(cv("resize the network's output"))?;
-                resized
-            };
+            let seen = mask::at_size(net.mask(&view.image)?, size)?;
             Mat::roi(&seen, view.region)
                 .and_then(|region| region.try_clone())
                 .map_err(cv("cut the region of interest from the network's view"))?
