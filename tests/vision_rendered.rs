@@ -196,4 +196,3 @@ fn loops_in_rendered_scenes_are_counted_right() {
         );
     }
 }
-
