@@ -4,8 +4,9 @@
 //! - `config.rs`: what the pipeline is asked to do ([`VisionConfig`]);
 //! - `detect.rs`: a run, stage by stage ([`Pipeline::detect`]);
 //! - `mask_choice.rs`: which mask a run takes, classical or network;
-//! - `work_area.rs`: the region of interest and the working size, and
-//!   the map back to the image's pixels;
+//! - `work_area.rs`: the region of interest and the working size, what
+//!   the network sees around the region, and the map back to the image's
+//!   pixels;
 //! - `straight_edge.rs`: straight detections dropped as edges;
 //! - `confidence.rs`: how much a detection looks like a cable;
 //! - `draw.rs`: paths and cables drawn as masks;
