@@ -268,6 +268,32 @@ fn without_crossings_masks_never_overlap() {
 }
 
 #[test]
+fn dark_scenes_are_tubes_that_stand_out_from_a_plain_dark_background() {
+    let options = SceneOptions {
+        backgrounds: BackgroundChoice::Dark,
+        ..SceneOptions::default()
+    };
+    for seed in 0..20 {
+        let scene = random_scene(&mut rng(seed), &options);
+        let Background::Plain { bgr: cloth } = scene.background else {
+            panic!("seed {seed}: {:?}", scene.background);
+        };
+        // Darker than any plain background of the other choices (80 and up).
+        assert!(cloth.iter().all(|&c| c < 70), "seed {seed}: {cloth:?}");
+        for cable in &scene.cables {
+            let contrast = distance(cable.bgr.map(f64::from), cloth);
+            assert!(
+                contrast >= 70.0,
+                "seed {seed}: {:?} on {cloth:?}",
+                cable.bgr
+            );
+            assert_eq!(cable.metal_end_px, 0.0);
+        }
+        assert!(scene.occluders.is_empty());
+    }
+}
+
+#[test]
 fn every_background_kind_renders() {
     let kinds = [
         Background::Plain { bgr: [90, 160, 30] },

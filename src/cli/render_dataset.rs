@@ -79,6 +79,9 @@ pub enum BackgroundArg {
     /// Wood, a board over a stretch of a cable in half the images: the
     /// simulated cell's kind of scene.
     Workbench,
+    /// Black cloth or a dark table under a light's falloff: tubes on a
+    /// dark background.
+    Dark,
 }
 
 pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
@@ -145,6 +148,7 @@ fn scene_options(args: &RenderDatasetArgs) -> Result<SceneOptions, String> {
             BackgroundArg::Any => BackgroundChoice::Any,
             BackgroundArg::Busy => BackgroundChoice::Busy,
             BackgroundArg::Workbench => BackgroundChoice::Workbench,
+            BackgroundArg::Dark => BackgroundChoice::Dark,
         },
         crossings: !args.no_crossings,
         min_diameter_px: args.min_diameter_px,

@@ -30,6 +30,9 @@ pub enum BackgroundChoice {
     /// workbench, a board lying over a stretch of one of them in half the
     /// images.
     Workbench,
+    /// Tubes on a dark background: black cloth or a dark table, plain
+    /// under a light's falloff.
+    Dark,
 }
 
 /// What random scenes may hold.
@@ -126,6 +129,7 @@ pub fn random_scene(rng: &mut impl Rng, options: &SceneOptions) -> SceneSpec {
         BackgroundChoice::Any => cluttered_background(rng),
         BackgroundChoice::Busy => BUSY[rng.random_range(0..BUSY.len())].clone(),
         BackgroundChoice::Workbench => Background::Wood,
+        BackgroundChoice::Dark => dark_background(rng),
     };
     let busy = options.backgrounds == BackgroundChoice::Busy;
 
@@ -239,6 +243,15 @@ fn plain_background(rng: &mut impl Rng) -> Background {
     }
     let level: f64 = rng.random_range(80.0..245.0);
     let tint: f64 = rng.random_range(0.0..20.0);
+    let bgr = [0; 3].map(|_| (level + rng.random_range(-tint..=tint)).clamp(0.0, 255.0) as u8);
+    Background::Plain { bgr }
+}
+
+/// Black cloth or a dark table: darker than [`plain_background`]'s
+/// darkest.
+fn dark_background(rng: &mut impl Rng) -> Background {
+    let level: f64 = rng.random_range(5.0..55.0);
+    let tint: f64 = rng.random_range(0.0..10.0);
     let bgr = [0; 3].map(|_| (level + rng.random_range(-tint..=tint)).clamp(0.0, 255.0) as u8);
     Background::Plain { bgr }
 }
