@@ -84,15 +84,19 @@ pub(super) fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
 }
 
 /// The confidence in [0, 1] that the path `points_px` (in `half_widths`'
-/// pixels), `length_px` long, is a cable, when the image's cables are
-/// `typical_width_px` wide; with the network's `belief`, times how sure it
-/// was along the path (see [`Belief::along`]).
+/// pixels), `length_px` long, is a cable; with the network's `belief`,
+/// times how sure it was along the path (see [`Belief::along`]).
+/// `typical_width_px`, the image's cables' width, where the mask may hold
+/// long even strokes of another width (the network's, on a busy
+/// background); `None` for a plain background's classical mask, where
+/// what stands out is cables, and tubes of several widths may lie
+/// together.
 pub(super) fn confidence(
     half_widths: &Mat,
     belief: Option<&Belief>,
     points_px: &[[f64; 2]],
     length_px: f64,
-    typical_width_px: f64,
+    typical_width_px: Option<f64>,
 ) -> f64 {
     let mut widths: Vec<f64> = points_px
         .iter()
@@ -103,8 +107,8 @@ pub(super) fn confidence(
         })
         .collect();
     // Not `<= 0.0`: a NaN width has no confidence either.
-    if widths.is_empty() || typical_width_px.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-    {
+    let positive = |w: f64| w.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater);
+    if widths.is_empty() || typical_width_px.is_some_and(|w| !positive(w)) {
         return 0.0;
     }
     let width = median(&mut widths);
@@ -112,7 +116,9 @@ pub(super) fn confidence(
     let spread = median(&mut deviations) / width;
     let long = (length_px / (CABLE_LENGTH_WIDTHS * width)).min(1.0);
     let even = 0.5_f64.powf((spread / WIDTH_SPREAD_HALF).powi(2));
-    let like_others = 0.5_f64.powf((width / typical_width_px).log(WIDTH_RATIO_HALF).powi(2));
+    let like_others = typical_width_px.map_or(1.0, |typical| {
+        0.5_f64.powf((width / typical).log(WIDTH_RATIO_HALF).powi(2))
+    });
     let believed = belief.map_or(1.0, |b| b.along(points_px));
     long * even * like_others * believed
 }
@@ -164,7 +170,13 @@ mod tests {
     fn a_long_even_cable_is_confident_and_a_splash_or_a_swelling_stroke_is_not() {
         let points = along([20.0, 100.0], [280.0, 100.0]);
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
-        let c = confidence(&half_widths(&cable).unwrap(), None, &points, 260.0, 9.0);
+        let c = confidence(
+            &half_widths(&cable).unwrap(),
+            None,
+            &points,
+            260.0,
+            Some(9.0),
+        );
         assert!(c > 0.9, "{c}");
 
         // A stroke swelling from 3 to 21 px and back.
@@ -174,19 +186,47 @@ mod tests {
                 line(m, (x, 100), (x + 4, 100), w);
             }
         });
-        let s = confidence(&half_widths(&stroke).unwrap(), None, &points, 260.0, 9.0);
+        let s = confidence(
+            &half_widths(&stroke).unwrap(),
+            None,
+            &points,
+            260.0,
+            Some(9.0),
+        );
         assert!(s < 0.6 * c, "{s} against {c}");
 
         // A splash: as wide as a cable, three widths long.
         let short = along([100.0, 100.0], [127.0, 100.0]);
         let splash = mask_with(|m| line(m, (100, 100), (127, 100), 9));
-        let p = confidence(&half_widths(&splash).unwrap(), None, &short, 27.0, 9.0);
+        let p = confidence(
+            &half_widths(&splash).unwrap(),
+            None,
+            &short,
+            27.0,
+            Some(9.0),
+        );
         assert!(p < 0.4, "{p}");
 
         // Four times as wide as the image's other cables.
         let wide = mask_with(|m| line(m, (20, 100), (280, 100), 36));
-        let w = confidence(&half_widths(&wide).unwrap(), None, &points, 260.0, 9.0);
+        let w = confidence(
+            &half_widths(&wide).unwrap(),
+            None,
+            &points,
+            260.0,
+            Some(9.0),
+        );
         assert!(w < 0.5 * c, "{w} against {c}");
+        // Twice as wide: halved among the network's strokes, as much a
+        // cable on a plain background's classical mask.
+        let tube = half_widths(&mask_with(|m| line(m, (20, 100), (280, 100), 18))).unwrap();
+        let among_strokes = confidence(&tube, None, &points, 260.0, Some(9.0));
+        let on_plain = confidence(&tube, None, &points, 260.0, None);
+        assert!(on_plain > 0.9, "{on_plain}");
+        assert!(
+            among_strokes < 0.6 * on_plain,
+            "{among_strokes} against {on_plain}"
+        );
     }
 
     #[test]
@@ -194,12 +234,24 @@ mod tests {
         let empty = mask_with(|_| {});
         let points = along([20.0, 100.0], [280.0, 100.0]);
         assert_eq!(
-            confidence(&half_widths(&empty).unwrap(), None, &points, 260.0, 9.0),
+            confidence(
+                &half_widths(&empty).unwrap(),
+                None,
+                &points,
+                260.0,
+                Some(9.0)
+            ),
             0.0
         );
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
         assert_eq!(
-            confidence(&half_widths(&cable).unwrap(), None, &points, 260.0, 0.0),
+            confidence(
+                &half_widths(&cable).unwrap(),
+                None,
+                &points,
+                260.0,
+                Some(0.0)
+            ),
             0.0
         );
     }
@@ -215,11 +267,11 @@ mod tests {
                 Mat::new_rows_cols_with_default(200, 300, core::CV_32FC1, Scalar::all(p)).unwrap();
             Belief::of(probability, size, 0.5).unwrap().unwrap()
         };
-        let shape_alone = confidence(&widths, None, &points, 260.0, 9.0);
-        let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, 9.0);
+        let shape_alone = confidence(&widths, None, &points, 260.0, Some(9.0));
+        let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, Some(9.0));
         assert!((certain - shape_alone).abs() < 1e-9);
         // At 0.8, three fifths of the way from the threshold to 1.
-        let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, 9.0);
+        let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, Some(9.0));
         assert!((unsure - 0.6 * shape_alone).abs() < 1e-6, "{unsure}");
         // A mask, not probabilities: no belief to weigh.
         assert!(Belief::of(cable.clone(), size, 0.5).unwrap().is_none());
@@ -227,7 +279,7 @@ mod tests {
         let small =
             Mat::new_rows_cols_with_default(50, 75, core::CV_32FC1, Scalar::all(0.8)).unwrap();
         let resized = Belief::of(small, size, 0.5).unwrap().unwrap();
-        let at_size = confidence(&widths, Some(&resized), &points, 260.0, 9.0);
+        let at_size = confidence(&widths, Some(&resized), &points, 260.0, Some(9.0));
         assert!((at_size - unsure).abs() < 1e-6, "{at_size}");
     }
 }

@@ -64,7 +64,7 @@ impl Pipeline {
         )?;
         timings_ms.push(("mask", ms_since(start)));
 
-        let found = self.cables_in(&work, &mask_roi, belief.as_ref(), roi, full)?;
+        let found = self.cables_in(&work, &mask_roi, mask_used, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -126,7 +126,8 @@ impl Pipeline {
 
     /// The instance, spline and instance-mask stages on a given CV_8U mask
     /// (non-zero = cable) of the whole image, ignoring the region of
-    /// interest: to test and time them on ground-truth masks.
+    /// interest: to test and time them on ground-truth masks. The mask is
+    /// taken as a classical one: only cables in it.
     pub fn instances_from_mask(&mut self, mask: &Mat) -> Result<MaskInstances, VisionError> {
         if mask.empty() || mask.rows() <= 0 || mask.cols() <= 0 {
             return Err(VisionError::EmptyImage { path: None });
@@ -138,11 +139,12 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, None, full, full)
+        self.cables_in(mask, mask, MaskMethod::Classical, None, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
-    /// `image_roi` (with the network's `belief` when it made the mask),
+    /// `image_roi` made by `mask_used` (with the network's `belief` when
+    /// it made the mask),
     /// region `roi` of an image of extent `full`, perhaps resized (see
     /// [`VisionConfig::work_width_px`]): what is found is given in the
     /// image's pixels.
@@ -150,6 +152,7 @@ impl Pipeline {
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
+        mask_used: MaskMethod,
         belief: Option<&Belief>,
         roi: Rect,
         full: Rect,
@@ -202,7 +205,7 @@ impl Pipeline {
                 belief,
                 &path.points_px,
                 path.length_px,
-                found.width_px,
+                (mask_used == MaskMethod::Network).then_some(found.width_px),
             );
             if confidence < self.config.min_confidence {
                 unconfident_dropped += 1;
