@@ -241,17 +241,20 @@ fn plain_background(rng: &mut impl Rng) -> Background {
     if rng.random_bool(0.25) {
         return Background::Gradient;
     }
-    let level: f64 = rng.random_range(80.0..245.0);
-    let tint: f64 = rng.random_range(0.0..20.0);
-    let bgr = [0; 3].map(|_| (level + rng.random_range(-tint..=tint)).clamp(0.0, 255.0) as u8);
-    Background::Plain { bgr }
+    tinted_plain(rng, 80.0..245.0, 20.0)
 }
 
 /// Black cloth or a dark table: darker than [`plain_background`]'s
 /// darkest.
 fn dark_background(rng: &mut impl Rng) -> Background {
-    let level: f64 = rng.random_range(5.0..55.0);
-    let tint: f64 = rng.random_range(0.0..10.0);
+    tinted_plain(rng, 5.0..55.0, 10.0)
+}
+
+/// A flat colour: a gray level drawn from `levels`, each channel off it
+/// by up to a tint drawn below `max_tint`.
+fn tinted_plain(rng: &mut impl Rng, levels: std::ops::Range<f64>, max_tint: f64) -> Background {
+    let level: f64 = rng.random_range(levels);
+    let tint: f64 = rng.random_range(0.0..max_tint);
     let bgr = [0; 3].map(|_| (level + rng.random_range(-tint..=tint)).clamp(0.0, 255.0) as u8);
     Background::Plain { bgr }
 }

@@ -166,17 +166,23 @@ mod tests {
             .collect()
     }
 
+    /// The confidence of a path along `mask`, shape alone, among cables
+    /// 9 px wide.
+    fn among_9_px(mask: &Mat, points_px: &[[f64; 2]], length_px: f64) -> f64 {
+        confidence(
+            &half_widths(mask).unwrap(),
+            None,
+            points_px,
+            length_px,
+            Some(9.0),
+        )
+    }
+
     #[test]
     fn a_long_even_cable_is_confident_and_a_splash_or_a_swelling_stroke_is_not() {
         let points = along([20.0, 100.0], [280.0, 100.0]);
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
-        let c = confidence(
-            &half_widths(&cable).unwrap(),
-            None,
-            &points,
-            260.0,
-            Some(9.0),
-        );
+        let c = among_9_px(&cable, &points, 260.0);
         assert!(c > 0.9, "{c}");
 
         // A stroke swelling from 3 to 21 px and back.
@@ -186,36 +192,18 @@ mod tests {
                 line(m, (x, 100), (x + 4, 100), w);
             }
         });
-        let s = confidence(
-            &half_widths(&stroke).unwrap(),
-            None,
-            &points,
-            260.0,
-            Some(9.0),
-        );
+        let s = among_9_px(&stroke, &points, 260.0);
         assert!(s < 0.6 * c, "{s} against {c}");
 
         // A splash: as wide as a cable, three widths long.
         let short = along([100.0, 100.0], [127.0, 100.0]);
         let splash = mask_with(|m| line(m, (100, 100), (127, 100), 9));
-        let p = confidence(
-            &half_widths(&splash).unwrap(),
-            None,
-            &short,
-            27.0,
-            Some(9.0),
-        );
+        let p = among_9_px(&splash, &short, 27.0);
         assert!(p < 0.4, "{p}");
 
         // Four times as wide as the image's other cables.
         let wide = mask_with(|m| line(m, (20, 100), (280, 100), 36));
-        let w = confidence(
-            &half_widths(&wide).unwrap(),
-            None,
-            &points,
-            260.0,
-            Some(9.0),
-        );
+        let w = among_9_px(&wide, &points, 260.0);
         assert!(w < 0.5 * c, "{w} against {c}");
         // Twice as wide: halved among the network's strokes, as much a
         // cable on a plain background's classical mask.
@@ -233,16 +221,7 @@ mod tests {
     fn a_path_off_the_mask_has_no_confidence() {
         let empty = mask_with(|_| {});
         let points = along([20.0, 100.0], [280.0, 100.0]);
-        assert_eq!(
-            confidence(
-                &half_widths(&empty).unwrap(),
-                None,
-                &points,
-                260.0,
-                Some(9.0)
-            ),
-            0.0
-        );
+        assert_eq!(among_9_px(&empty, &points, 260.0), 0.0);
         let cable = mask_with(|m| line(m, (20, 100), (280, 100), 9));
         assert_eq!(
             confidence(
