@@ -506,12 +506,7 @@ pub fn binarize_network_mask(
         core::CV_32F => probability_cut,
         _ => return Err(bad()),
     };
-    let binary = resize_and_cut(raw, size, cut)?;
-    let mut out = Mat::default();
-    binary
-        .convert_to(&mut out, core::CV_8U, 1.0, 0.0)
-        .map_err(cv("network mask to 8-bit"))?;
-    Ok(out)
+    resize_and_cut(raw, size, cut)
 }
 
 /// `image` resized bilinearly to `size`, or itself when it is that size
@@ -527,7 +522,7 @@ pub fn at_size(image: Mat, size: Size) -> Result<Mat, VisionError> {
 }
 
 /// `mask` resized bilinearly to `size` (when it is not that size already)
-/// and cut: 255 above `cut`, 0 elsewhere, in `mask`'s depth. Bilinear
+/// and cut: a CV_8U mask, 255 above `cut` and 0 elsewhere. Bilinear
 /// resizing then cutting at half keeps a mask's edges smooth.
 pub fn resize_and_cut(mask: &Mat, size: Size, cut: f64) -> Result<Mat, VisionError> {
     let resized;
@@ -540,8 +535,10 @@ pub fn resize_and_cut(mask: &Mat, size: Size, cut: f64) -> Result<Mat, VisionErr
         resized = out;
         &resized
     };
+    // Straight to 8 bits: a float mask thresholded in its own depth would
+    // be a second image of the size, and a second pass to convert it.
     let mut binary = Mat::default();
-    imgproc::threshold(source, &mut binary, cut, 255.0, imgproc::THRESH_BINARY)
+    core::compare(source, &Scalar::all(cut), &mut binary, core::CMP_GT)
         .map_err(cv("binarize mask"))?;
     Ok(binary)
 }
