@@ -10,12 +10,14 @@
 //! - `straight_edge.rs`: straight detections dropped as edges;
 //! - `confidence.rs`: how much a detection looks like a cable;
 //! - `draw.rs`: paths and cables drawn as masks;
+//! - `freed_memory.rs`: the memory a run frees kept for the next;
 //! - `output.rs`: what a run found ([`VisionOutput`]).
 
 mod confidence;
 mod config;
 mod detect;
 mod draw;
+mod freed_memory;
 mod mask_choice;
 mod output;
 mod straight_edge;
@@ -40,6 +42,7 @@ fn ms_since(start: Instant) -> f64 {
 
 impl Pipeline {
     pub fn new(config: VisionConfig) -> Self {
+        freed_memory::keep_freed_memory();
         Pipeline { config }
     }
 
