@@ -6,11 +6,11 @@
 //! system once it exceeds a trim threshold, which starts at 128 KiB and
 //! rises to twice the largest mmapped block freed so far (`mallopt(3)`,
 //! M_MMAP_THRESHOLD and M_TRIM_THRESHOLD). With the pipeline's buffers
-//! alone it stays near 2.4 MiB, so every run gave its buffers back and
-//! faulted them in again: about 1200 page faults per 640 × 480 run, 3–5 ms
-//! on this machine (docs/vision.md, "End to end"). Freeing one larger
-//! block once raises both thresholds for the process; other allocators
-//! are not harmed by it.
+//! alone it stays below what a run frees, so every run gave its buffers
+//! back and faulted them in again, page by page (docs/vision.md, "End to
+//! end", has the count and the cost). Freeing one larger block once
+//! raises both thresholds for the process; other allocators are not
+//! harmed by it.
 
 use std::sync::Once;
 
