@@ -11,10 +11,11 @@ use opencv::core::{self, Mat, Size};
 use opencv::imgproc;
 use opencv::prelude::*;
 
+use super::config::MaskMethod;
 #[cfg(doc)]
 use super::config::VisionConfig;
 use crate::perception::vision::error::{VisionError, cv};
-use crate::perception::vision::mask;
+use crate::perception::vision::mask::{self, BackgroundStats};
 
 /// Lengths, in widths, from which a detection is long enough to be a
 /// cable rather than a scrap or a splash.
@@ -25,6 +26,21 @@ const CABLE_LENGTH_WIDTHS: f64 = 10.0;
 const WIDTH_SPREAD_HALF: f64 = 0.3;
 /// The factor off the image's typical width at which confidence halves.
 const WIDTH_RATIO_HALF: f64 = 2.0;
+
+/// The share of the image near the background's colour from which the
+/// background holds too little paint for strokes to pass as cables: tubes
+/// on dark cloth that cover more than the plain test allows (the network
+/// is asked there) lie on such a background, beside one another in
+/// several widths.
+const STROKELESS_NEAR_FRACTION: f64 = 0.8;
+
+/// Whether a mask made by `mask_used` on `background` may hold paint
+/// strokes as long and even as cables, so that a detection's width is
+/// weighed against the image's other cables': the network's mask, unless
+/// the background is mostly of one colour.
+pub(super) fn strokes_possible(mask_used: MaskMethod, background: &BackgroundStats) -> bool {
+    mask_used == MaskMethod::Network && background.near_fraction < STROKELESS_NEAR_FRACTION
+}
 
 /// The network's probabilities of a mask (CV_32F, the mask's size) and
 /// the threshold it was cut at.
@@ -215,6 +231,23 @@ mod tests {
             among_strokes < 0.6 * on_plain,
             "{among_strokes} against {on_plain}"
         );
+    }
+
+    #[test]
+    fn widths_are_weighed_against_strokes_only_in_the_networks_mask_on_a_busy_background() {
+        let background = |near_fraction: f64| BackgroundStats {
+            background_lab: [20.0, 128.0, 128.0],
+            near_fraction,
+            plain: false,
+            threshold_lab: 0.0,
+            ambiguous_ratio: 0.0,
+        };
+        // A Pollock-like print: a third of it near its median colour.
+        assert!(strokes_possible(MaskMethod::Network, &background(0.3)));
+        // Thick tubes on black cloth, covering more than the plain test
+        // allows: the cloth is still most of the image.
+        assert!(!strokes_possible(MaskMethod::Network, &background(0.85)));
+        assert!(!strokes_possible(MaskMethod::Classical, &background(0.3)));
     }
 
     #[test]

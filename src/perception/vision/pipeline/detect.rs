@@ -64,7 +64,15 @@ impl Pipeline {
         )?;
         timings_ms.push(("mask", ms_since(start)));
 
-        let found = self.cables_in(&work, &mask_roi, mask_used, belief.as_ref(), roi, full)?;
+        let strokes_possible = confidence::strokes_possible(mask_used, &background);
+        let found = self.cables_in(
+            &work,
+            &mask_roi,
+            strokes_possible,
+            belief.as_ref(),
+            roi,
+            full,
+        )?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -139,12 +147,13 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, MaskMethod::Classical, None, full, full)
+        self.cables_in(mask, mask, false, None, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
-    /// `image_roi` made by `mask_used` (with the network's `belief` when
-    /// it made the mask),
+    /// `image_roi` (with the network's `belief` when it made the mask;
+    /// `strokes_possible` when it may hold paint strokes as long and even
+    /// as cables, see [`confidence::strokes_possible`]),
     /// region `roi` of an image of extent `full`, perhaps resized (see
     /// [`VisionConfig::work_width_px`]): what is found is given in the
     /// image's pixels.
@@ -152,7 +161,7 @@ impl Pipeline {
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
-        mask_used: MaskMethod,
+        strokes_possible: bool,
         belief: Option<&Belief>,
         roi: Rect,
         full: Rect,
@@ -205,7 +214,7 @@ impl Pipeline {
                 belief,
                 &path.points_px,
                 path.length_px,
-                (mask_used == MaskMethod::Network).then_some(found.width_px),
+                strokes_possible.then_some(found.width_px),
             );
             if confidence < self.config.min_confidence {
                 unconfident_dropped += 1;
