@@ -103,9 +103,8 @@ pub(super) fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
 /// pixels), `length_px` long, is a cable; with the network's `belief`,
 /// times how sure it was along the path (see [`Belief::along`]).
 /// `typical_width_px`, the image's cables' width, where the mask may hold
-/// long even strokes of another width (the network's, on a busy
-/// background); `None` for a plain background's classical mask, where
-/// what stands out is cables, and tubes of several widths may lie
+/// long even strokes of another width (see [`strokes_possible`]); `None`
+/// where what stands out is cables, and tubes of several widths may lie
 /// together.
 pub(super) fn confidence(
     half_widths: &Mat,
