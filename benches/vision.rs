@@ -69,14 +69,14 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     });
     let mut pipeline = Pipeline::new(config.clone());
     group.bench_function("instances+spline+masks (skeleton)", |b| {
-        b.iter(|| pipeline.instances_from_mask(black_box(instance_mask)))
+        b.iter(|| pipeline.instances_from_mask(black_box(instance_mask), None))
     });
     let mut sp = Pipeline::new(VisionConfig {
         instances: InstanceMethod::Superpixels,
         ..config.clone()
     });
     group.bench_function("instances+spline+masks (superpixels)", |b| {
-        b.iter(|| sp.instances_from_mask(black_box(instance_mask)))
+        b.iter(|| sp.instances_from_mask(black_box(instance_mask), None))
     });
     group.bench_function("whole pipeline (classical mask)", |b| {
         b.iter(|| pipeline.detect(black_box(image), None))

@@ -61,7 +61,7 @@ fn instances_on_truth(method: InstanceMethod) -> Vec<(String, ImageScore)> {
     for stem in stems(&dir) {
         let truth = GroundTruth::load(&dir, &stem).expect("ground truth loads");
         let found = pipeline
-            .instances_from_mask(&truth.union_mask)
+            .instances_from_mask(&truth.union_mask, None)
             .expect("instances from the true mask");
         scores.push((
             stem,

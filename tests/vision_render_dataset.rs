@@ -263,7 +263,7 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
     assert_eq!(stems, ["00001", "00002"]);
     assert_eq!(
         e["mask_used"],
-        serde_json::json!({"classical": 2, "network": 0}),
+        serde_json::json!({"classical": 2, "network": 0, "labelled": 0}),
         "{e}"
     );
     // Exact ground truth and plain backgrounds: the classical mask matches,
@@ -335,4 +335,49 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         rows[0]["union_dice"].as_f64().expect("dice") > 0.8,
         "{rows}"
     );
+}
+
+#[test]
+fn eval_vision_finds_the_cables_in_the_labelled_masks_without_a_network() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("busy");
+    let run = render(
+        &out,
+        &["--count", "2", "--seed", "31", "--backgrounds", "busy"],
+    );
+    assert!(run.status.success());
+    // A model that is no network: the labelled masks need none.
+    let args = [
+        "eval-vision",
+        text(&out),
+        "--labelled-mask",
+        "--model",
+        "README.md",
+    ];
+    let eval = cablecell(&[&args[..], &["--json"]].concat());
+    assert!(
+        eval.status.success(),
+        "{}",
+        String::from_utf8_lossy(&eval.stderr)
+    );
+    let e: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("JSON");
+    common::assert_follows_schema("eval-vision", &e);
+    assert_eq!(
+        e["mask_used"],
+        serde_json::json!({"classical": 0, "network": 0, "labelled": 2}),
+        "{e}"
+    );
+    // The cables' masks are cut from the labelled one: they cover nearly
+    // all of it and nothing else, over a background as busy as the paper's.
+    assert!(
+        e["union_dice"]["mean"].as_f64().expect("dice") > 0.95,
+        "{e}"
+    );
+    assert_eq!(e["found_labelled"]["rate"], 1.0, "{e}");
+    assert!(e["stage_ms"].get("instances").is_some(), "{e}");
+    assert!(e["stage_ms"].get("mask").is_none(), "{e}");
+
+    let with_overlay = cablecell(&[&args[..], &["--overlay", text(dir.path())]].concat());
+    assert_eq!(with_overlay.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&with_overlay.stderr).contains("--overlay"));
 }

@@ -53,6 +53,12 @@ pub struct EvalVisionArgs {
     /// not labelled.
     #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
     pub overlay: Option<PathBuf>,
+    /// Find the cables in each image's labelled mask instead of one the
+    /// pipeline finds (colours still from the image; at the image's own
+    /// size, with no region of interest): what the instance stages count
+    /// with a perfect mask, to tell their errors from the mask's.
+    #[arg(long, conflicts_with_all = ["sweep", "overlay"])]
+    pub labelled_mask: bool,
     /// Print the scores as JSON (`cablecell json-schema eval-vision`, or
     /// `eval-vision-sweep` with --sweep).
     #[arg(long)]
@@ -104,6 +110,8 @@ struct Evaluation {
 struct MaskUse {
     classical: usize,
     network: usize,
+    /// The labels' own (`--labelled-mask`).
+    labelled: usize,
 }
 
 /// The labels' own union DICE: their centre lines drawn `width_px` wide
@@ -152,6 +160,7 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
     // is asked for, so that a model that is no network (or no runtime) is
     // the command line's fault, found whether or not an image needs it.
     if !matches!(args.vision.mask, MaskArg::Classical)
+        && !args.labelled_mask
         && let Err(error) = args.vision.network().load()
     {
         eprintln!("error: {error}");
@@ -165,7 +174,13 @@ pub fn eval_vision(args: &EvalVisionArgs) -> Status {
         return sweep(args, &samples);
     }
     let bar = progress::bar(samples.len(), "images");
-    let evaluated = evaluate(&args.vision, &samples, args.overlay.as_deref(), &bar);
+    let evaluated = evaluate(
+        &args.vision,
+        &samples,
+        args.labelled_mask,
+        args.overlay.as_deref(),
+        &bar,
+    );
     bar.finish_and_clear();
     let report = evaluated.and_then(|evaluation| {
         Ok(Report {

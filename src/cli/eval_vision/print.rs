@@ -150,12 +150,20 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
             100.0 * rate.ci95_high
         );
     }
-    outln!(
-        "  {:<22} classical in {}, network in {} of the images",
-        "mask used",
-        e.mask_used.classical,
-        e.mask_used.network
-    );
+    if e.mask_used.labelled > 0 {
+        outln!(
+            "  {:<22} the labelled one in {} of the images (--labelled-mask)",
+            "mask used",
+            e.mask_used.labelled
+        );
+    } else {
+        outln!(
+            "  {:<22} classical in {}, network in {} of the images",
+            "mask used",
+            e.mask_used.classical,
+            e.mask_used.network
+        );
+    }
     for (stage, s) in &e.stage_ms {
         outln!(
             "  {:<22} median {:.2} ms  p95 {:.2} ms",

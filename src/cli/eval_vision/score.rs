@@ -5,9 +5,13 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use cablecell::campaign::stats::{Rate, Summary};
-use cablecell::perception::vision::eval::{GroundTruth, ImageScore, label_consistency, score};
-use cablecell::perception::vision::{MaskMethod, MaskNetwork, VisionError, VisionOutput};
-use opencv::core::{Mat, Point, Scalar};
+use cablecell::perception::vision::eval::{
+    GroundTruth, ImageScore, label_consistency, score, score_cables,
+};
+use cablecell::perception::vision::{
+    CableInstance, MaskMethod, MaskNetwork, Pipeline, VisionError, VisionOutput,
+};
+use opencv::core::{self, Mat, Point, Scalar};
 use opencv::imgproc;
 use opencv::prelude::*;
 
@@ -48,12 +52,15 @@ impl From<String> for Failure {
 }
 
 /// Runs the pipeline configured by `vision` on every sample and scores it,
-/// drawing each result into `overlay` when given. The first image is run
+/// drawing each result into `overlay` when given; with `labelled_mask`,
+/// its instance stages on each sample's labelled mask instead (see
+/// `EvalVisionArgs::labelled_mask`). The first image is run
 /// once untimed before the loop, so that loading the network and first-use
 /// allocations are not counted as its time. `bar` ticks once an image.
 pub(super) fn evaluate(
     vision: &VisionArgs,
     samples: &[Sample],
+    labelled_mask: bool,
     overlay: Option<&Path>,
     bar: &ProgressBar,
 ) -> Result<Evaluation, Failure> {
@@ -76,36 +83,52 @@ pub(super) fn evaluate(
     let mut stage_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     for (k, sample) in samples.iter().enumerate() {
         bar.inc(1);
+        let mut run = |pipeline: &mut Pipeline| -> Result<Run, VisionError> {
+            if labelled_mask {
+                let found =
+                    pipeline.instances_from_mask(&sample.truth.union_mask, Some(&sample.image))?;
+                let union_mask = union_of(&found.cables)?;
+                Ok(Run {
+                    score: score_cables(&found.cables, &union_mask, &sample.truth)?,
+                    timings_ms: found.timings_ms,
+                    notes: Vec::new(),
+                    output: None,
+                })
+            } else {
+                let output =
+                    pipeline.detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))?;
+                Ok(Run {
+                    score: score(&output, &sample.truth)?,
+                    timings_ms: output.timings_ms.clone(),
+                    notes: output.notes.clone(),
+                    output: Some(output),
+                })
+            }
+        };
         if k == 0 {
-            pipeline
-                .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
-                .map_err(|error| failed(sample, &error))?;
+            run(&mut pipeline).map_err(|error| failed(sample, &error))?;
         }
-        let output = pipeline
-            .detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))
-            .map_err(|error| failed(sample, &error))?;
-        for (stage, ms) in &output.timings_ms {
+        let run = run(&mut pipeline).map_err(|error| failed(sample, &error))?;
+        for (stage, ms) in &run.timings_ms {
             stage_ms.entry(stage).or_default().push(*ms);
         }
         stage_ms
             .entry("total")
             .or_default()
-            .push(output.timings_ms.iter().map(|(_, ms)| ms).sum());
-        let image_score = score(&output, &sample.truth)
-            .map_err(|error| format!("{}: {error}", sample.path.display()))?;
-        if let Some(dir) = overlay {
-            let drawn = draw_comparison(&sample.image, &output, &sample.truth, &image_score)
+            .push(run.timings_ms.iter().map(|(_, ms)| ms).sum());
+        if let (Some(dir), Some(output)) = (overlay, &run.output) {
+            let drawn = draw_comparison(&sample.image, output, &sample.truth, &run.score)
                 .map_err(|e| format!("cannot draw the overlay of {}: {e}", sample.stem))?;
             write_png(&dir.join(format!("{}.png", sample.stem)), &drawn)?;
         }
-        per_image.push((sample.stem.clone(), image_score));
-        match output.mask_used {
-            MaskMethod::Network => mask_used.network += 1,
-            _ => mask_used.classical += 1,
+        per_image.push((sample.stem.clone(), run.score));
+        match run.output.map(|output| output.mask_used) {
+            None => mask_used.labelled += 1,
+            Some(MaskMethod::Network) => mask_used.network += 1,
+            Some(_) => mask_used.classical += 1,
         }
         notes.extend(
-            output
-                .notes
+            run.notes
                 .into_iter()
                 .map(|note| (sample.stem.clone(), note)),
         );
@@ -151,6 +174,35 @@ pub(super) fn evaluate(
         mask_used,
         notes,
     })
+}
+
+/// One image's run: its score, the stages' times, what the pipeline said
+/// of it, and its whole output when the pipeline found the mask.
+struct Run {
+    score: ImageScore,
+    timings_ms: Vec<(&'static str, f64)>,
+    notes: Vec<String>,
+    output: Option<VisionOutput>,
+}
+
+/// The union of the cables' masks.
+fn union_of(cables: &[CableInstance]) -> Result<Mat, VisionError> {
+    let mut union = Mat::default();
+    for mask in cables.iter().filter_map(|c| c.mask.as_ref()) {
+        union = if union.empty() {
+            mask.clone()
+        } else {
+            let mut both = Mat::default();
+            core::bitwise_or(&union, mask, &mut both, &core::no_array()).map_err(|source| {
+                VisionError::OpenCv {
+                    stage: "the union of the cables' masks",
+                    source,
+                }
+            })?;
+            both
+        };
+    }
+    Ok(union)
 }
 
 /// `image` with the cables found drawn as `detect --overlay` draws them,

@@ -105,7 +105,7 @@ pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
     for round in 0..args.rounds {
         for (k, (setting, vision)) in settings.iter().enumerate() {
             bar.set_message(setting.clone());
-            let evaluation = match evaluate(vision, samples, None, &bar) {
+            let evaluation = match evaluate(vision, samples, false, None, &bar) {
                 Ok(evaluation) => evaluation,
                 Err(Failure { message, status }) => {
                     bar.finish_and_clear();

@@ -116,6 +116,17 @@ pub enum VisionError {
         expected_from: String,
     },
 
+    /// A mask given to find cables in differs in size from its image.
+    #[error(
+        "the mask is {mask_cols}x{mask_rows} px and its image {image_cols}x{image_rows} px; they must be the same size"
+    )]
+    MaskSize {
+        mask_cols: i32,
+        mask_rows: i32,
+        image_cols: i32,
+        image_rows: i32,
+    },
+
     /// A ground-truth entry has no per-cable masks (`STEM_mask_0.png`).
     #[error("ground truth for {stem} in {dir}: no per-cable masks ({stem}_mask_0.png)")]
     NoTruthMasks { dir: PathBuf, stem: String },

@@ -3,6 +3,7 @@
 //! the mask's paths found, cut and filtered, splines fitted, and what
 //! was found mapped back to the image's pixels, each stage timed.
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use opencv::core::{self, Mat, Rect};
@@ -16,7 +17,7 @@ use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 use super::straight_edge::{EDGE_NOISE_SAGITTA_PX, looks_like_edge, straight_cable};
 use super::work_area::{NetworkView, ToImage, clip_roi, crop, to_work_size, work_scale};
 use super::{Pipeline, ms_since};
-use crate::perception::vision::error::VisionError;
+use crate::perception::vision::error::{VisionError, cv};
 use crate::perception::vision::spline::{self, BSpline};
 use crate::perception::vision::{mask, paths, skeleton, superpixels};
 
@@ -134,9 +135,17 @@ impl Pipeline {
 
     /// The instance, spline and instance-mask stages on a given CV_8U mask
     /// (non-zero = cable) of the whole image, ignoring the region of
-    /// interest: to test and time them on ground-truth masks. The mask is
-    /// taken as a classical one: only cables in it.
-    pub fn instances_from_mask(&mut self, mask: &Mat) -> Result<MaskInstances, VisionError> {
+    /// interest and the working width: to test and time them on
+    /// ground-truth masks, and to tell their errors from the mask's. The
+    /// mask is taken as a classical one: only cables in it. With the
+    /// `image` it is of (its size; gray, BGRA and 16-bit are converted),
+    /// crossings are also paired by colour and straight cables told from
+    /// edges by their sides, as [`Pipeline::detect`] does.
+    pub fn instances_from_mask(
+        &mut self,
+        mask: &Mat,
+        image: Option<&Mat>,
+    ) -> Result<MaskInstances, VisionError> {
         if mask.empty() || mask.rows() <= 0 || mask.cols() <= 0 {
             return Err(VisionError::EmptyImage { path: None });
         }
@@ -147,7 +156,26 @@ impl Pipeline {
             });
         }
         let full = Rect::new(0, 0, mask.cols(), mask.rows());
-        self.cables_in(mask, mask, false, None, full, full)
+        // `cables_in` reads colours from its image only when it has three
+        // channels: without an image, the mask stands in for it.
+        let image = match image {
+            Some(image) => {
+                let bgr = mask::to_bgr8(image)?;
+                if bgr.size().map_err(cv("the image's size"))?
+                    != mask.size().map_err(cv("the mask's size"))?
+                {
+                    return Err(VisionError::MaskSize {
+                        mask_cols: mask.cols(),
+                        mask_rows: mask.rows(),
+                        image_cols: bgr.cols(),
+                        image_rows: bgr.rows(),
+                    });
+                }
+                bgr
+            }
+            None => Cow::Borrowed(mask),
+        };
+        self.cables_in(&image, mask, false, None, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
@@ -169,8 +197,8 @@ impl Pipeline {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
         let found = match self.config.instances {
-            // `instances_from_mask` has no image and passes the mask as one:
-            // crossings are then paired by shape alone.
+            // `instances_from_mask` without an image passes the mask as
+            // one: crossings are then paired by shape alone.
             InstanceMethod::Skeleton => skeleton::paths_from_mask(
                 mask_roi,
                 (image_roi.channels() == 3).then_some(image_roi),
