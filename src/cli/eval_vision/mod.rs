@@ -1,4 +1,4 @@
-//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep [--rounds N]]`
+//! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep [--rounds N]] [--overlay DIR] [--labelled-mask]`
 
 mod load;
 mod print;
