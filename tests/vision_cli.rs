@@ -409,7 +409,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
     // Dark cables on a plain table: the classical mask, clean, on both.
     assert_eq!(
         e["mask_used"],
-        serde_json::json!({"classical": 2, "network": 0}),
+        serde_json::json!({"classical": 2, "network": 0, "labelled": 0}),
         "{e}"
     );
     assert_eq!(e["notes"].as_array().map(Vec::len), Some(0), "{e}");
