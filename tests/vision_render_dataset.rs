@@ -354,13 +354,7 @@ fn eval_vision_finds_the_cables_in_the_labelled_masks_without_a_network() {
         "--model",
         "README.md",
     ];
-    let eval = cablecell(&[&args[..], &["--json"]].concat());
-    assert!(
-        eval.status.success(),
-        "{}",
-        String::from_utf8_lossy(&eval.stderr)
-    );
-    let e: serde_json::Value = serde_json::from_slice(&eval.stdout).expect("JSON");
+    let e = common::json_of(&[&args[..], &["--json"]].concat());
     common::assert_follows_schema("eval-vision", &e);
     assert_eq!(
         e["mask_used"],

@@ -9,9 +9,9 @@ use cablecell::perception::vision::eval::{
     GroundTruth, ImageScore, label_consistency, score, score_cables,
 };
 use cablecell::perception::vision::{
-    CableInstance, MaskMethod, MaskNetwork, Pipeline, VisionError, VisionOutput,
+    MaskMethod, MaskNetwork, Pipeline, VisionError, VisionOutput, union_mask,
 };
-use opencv::core::{self, Mat, Point, Scalar};
+use opencv::core::{Mat, Point, Rect, Scalar};
 use opencv::imgproc;
 use opencv::prelude::*;
 
@@ -87,7 +87,9 @@ pub(super) fn evaluate(
             if labelled_mask {
                 let found =
                     pipeline.instances_from_mask(&sample.truth.union_mask, Some(&sample.image))?;
-                let union_mask = union_of(&found.cables)?;
+                let mask = &sample.truth.union_mask;
+                let full = Rect::new(0, 0, mask.cols(), mask.rows());
+                let union_mask = union_mask(&found.cables, full)?;
                 Ok(Run {
                     score: score_cables(&found.cables, &union_mask, &sample.truth)?,
                     timings_ms: found.timings_ms,
@@ -95,12 +97,12 @@ pub(super) fn evaluate(
                     output: None,
                 })
             } else {
-                let output =
+                let mut output =
                     pipeline.detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))?;
                 Ok(Run {
                     score: score(&output, &sample.truth)?,
-                    timings_ms: output.timings_ms.clone(),
-                    notes: output.notes.clone(),
+                    timings_ms: std::mem::take(&mut output.timings_ms),
+                    notes: std::mem::take(&mut output.notes),
                     output: Some(output),
                 })
             }
@@ -183,26 +185,6 @@ struct Run {
     timings_ms: Vec<(&'static str, f64)>,
     notes: Vec<String>,
     output: Option<VisionOutput>,
-}
-
-/// The union of the cables' masks.
-fn union_of(cables: &[CableInstance]) -> Result<Mat, VisionError> {
-    let mut union = Mat::default();
-    for mask in cables.iter().filter_map(|c| c.mask.as_ref()) {
-        union = if union.empty() {
-            mask.clone()
-        } else {
-            let mut both = Mat::default();
-            core::bitwise_or(&union, mask, &mut both, &core::no_array()).map_err(|source| {
-                VisionError::OpenCv {
-                    stage: "the union of the cables' masks",
-                    source,
-                }
-            })?;
-            both
-        };
-    }
-    Ok(union)
 }
 
 /// `image` with the cables found drawn as `detect --overlay` draws them,

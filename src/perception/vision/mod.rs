@@ -21,6 +21,6 @@ pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summa
 pub use mask::BackgroundStats;
 pub use pipeline::{
     CableInstance, DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork,
-    Pipeline, VisionConfig, VisionOutput, VisionSkip,
+    Pipeline, VisionConfig, VisionOutput, VisionSkip, union_mask,
 };
 pub use spline::BSpline;

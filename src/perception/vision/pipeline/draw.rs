@@ -86,7 +86,7 @@ pub(crate) fn draw_paths(
 
 /// The union of the `cables`' own masks in an image of extent `full`:
 /// CV_8U 0/255.
-pub(super) fn union_mask(cables: &[CableInstance], full: Rect) -> Result<Mat, VisionError> {
+pub fn union_mask(cables: &[CableInstance], full: Rect) -> Result<Mat, VisionError> {
     let mut union_mask = mask::zeros_u8(full.height, full.width)?;
     for own in cables.iter().filter_map(|c| c.mask.as_ref()) {
         union_mask

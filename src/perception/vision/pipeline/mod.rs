@@ -27,6 +27,7 @@ use std::time::Instant;
 
 pub use config::{DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, VisionConfig};
 pub(crate) use draw::draw_paths;
+pub use draw::union_mask;
 pub use mask_choice::MaskNetwork;
 pub use output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 pub use work_area::MAX_ENLARGEMENT;
