@@ -256,15 +256,17 @@ def paste_cables(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray,
     return np.clip(img, 0, 255).round().astype(np.uint8), mask
 
 
-def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int) -> tuple[np.ndarray, np.ndarray]:
-    """A random crop x crop window of a randomly flipped, scaled, rotated and
-    recoloured image, with its mask warped alike."""
+def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: int,
+            scales: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """A random crop x crop window of a randomly flipped, scaled (within
+    `scales`, 3 times in 10 not at all), rotated and recoloured image, with
+    its mask warped alike."""
     h, w = mask.shape
     if rng.random() < 0.5:
         img, mask = img[:, ::-1], mask[:, ::-1]
     if rng.random() < 0.5:
         img, mask = img[::-1], mask[::-1]
-    s = rng.uniform(0.75, 1.35) if rng.random() < 0.7 else 1.0
+    s = rng.uniform(*scales) if rng.random() < 0.7 else 1.0
     a = rng.uniform(-180, 180) if rng.random() < 0.5 else rng.uniform(-15, 15)
     cx, cy = rng.uniform(crop / 2 / s, w - crop / 2 / s), rng.uniform(crop / 2 / s, h - crop / 2 / s)
     mtx = cv2.getRotationMatrix2D((cx, cy), a, s)
@@ -325,7 +327,7 @@ def make_batch(rng, real, synth, busy, cutouts, args):
             img, m = paste_cables(rng, img, m, cutouts)
         if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
             img = recolour_background(rng, img, m)
-        img, m = augment(rng, img, m, args.crop)
+        img, m = augment(rng, img, m, args.crop, tuple(args.scales))
         xs.append(img)
         ys.append(m)
     x = torch.from_numpy(np.stack(xs)).permute(0, 3, 1, 2).contiguous(memory_format=torch.channels_last)
@@ -539,6 +541,8 @@ def main() -> int:
     parser.add_argument("--batch", type=int, default=16)
     parser.add_argument("--crop", type=int, default=160, help="side of the square training crops, in network pixels")
     parser.add_argument("--lr", type=float, default=4e-3)
+    parser.add_argument("--scales", type=float, nargs=2, default=[0.75, 1.35], metavar=("LOW", "HIGH"),
+                        help="range of the random rescaling of the half-size images (0.75 shows them at the pipeline's 0.375)")
     parser.add_argument("--synthetic", type=Path, nargs="+",
                         help="folders written by `cablecell render-dataset` (required to train), drawn from "
                              "as one set")
