@@ -32,9 +32,10 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     group.bench_function("plain-background test", |b| {
         b.iter(|| mask::background_stats(black_box(image)))
     });
-    // Asked only for an image with a straight detection whose sides are alike.
+    // Asked only for an image with a straight detection whose sides are
+    // alike; off the cables' mask and a width around it.
     group.bench_function("plain-around-each-pixel test", |b| {
-        b.iter(|| mask::plain_locally(black_box(image)))
+        b.iter(|| mask::plain_locally(black_box(image), instance_mask, found.width_px))
     });
     group.bench_function("mask (classical)", |b| {
         b.iter(|| {

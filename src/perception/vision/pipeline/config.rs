@@ -66,7 +66,7 @@ pub struct VisionConfig {
     /// however short: the network takes edges of paper, folders and tables
     /// for cables, and a cable lying loose is never that straight (the
     /// straightest in cables-dev's training photographs bends like a 730 px
-    /// arc). On a background plain around each pixel (see
+    /// arc). On a background plain around each pixel off the cables (see
     /// [`mask::plain_locally`]), such a path is kept when the background is
     /// alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has two
     /// different sides. 0 keeps every path: for a cell whose cable is

@@ -61,10 +61,10 @@ const SIDE_OFFSETS_WIDTHS: [f64; 2] = [1.0, 1.5];
 
 /// Whether a straight detection (points along it, cables `width_px`
 /// wide) is a cable, not an edge: the BGR `image`'s background is alike
-/// on the detection's two sides and plain around each pixel
-/// ([`mask::plain_locally`], the dearer test, asked second and kept in
-/// `plain_around` for the image once asked). Not when the image's colour
-/// is unknown.
+/// on the detection's two sides and plain around each pixel off the
+/// cables of `mask` and a width around them ([`mask::plain_locally`], the
+/// dearer test, asked second and kept in `plain_around` for the image
+/// once asked). Not when the image's colour is unknown.
 pub(super) fn straight_cable(
     image: &Mat,
     mask: &Mat,
@@ -80,7 +80,7 @@ pub(super) fn straight_cable(
     }
     match *plain_around {
         Some(plain) => Ok(plain),
-        None => Ok(*plain_around.insert(mask::plain_locally(image)?)),
+        None => Ok(*plain_around.insert(mask::plain_locally(image, mask, width_px)?)),
     }
 }
 
