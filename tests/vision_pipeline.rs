@@ -809,7 +809,7 @@ fn a_straight_detection_is_dropped_as_an_edge_unless_its_sides_are_alike() {
     let band = drawn_line(&lines[0], 8);
     core::bitwise_or_def(&scene.union_mask, &band, &mut known).unwrap();
     let by_network = |image: &Mat, config: VisionConfig| {
-        let mut net = KnownMask(known.clone());
+        let mut net = KnownMask::new(known.clone());
         let config = VisionConfig {
             mask: MaskMethod::Network,
             ..config
@@ -874,12 +874,57 @@ fn falling_off(image: &Mat) -> Mat {
 }
 
 /// Stands in for the segmentation network: the mask of the drawn cables.
-struct KnownMask(Mat);
+/// It keeps whether it was told each image's background was busy.
+struct KnownMask {
+    mask: Mat,
+    busy: Vec<bool>,
+}
+
+impl KnownMask {
+    fn new(mask: Mat) -> Self {
+        Self {
+            mask,
+            busy: Vec::new(),
+        }
+    }
+}
 
 impl MaskNetwork for KnownMask {
-    fn mask(&mut self, _bgr: &Mat) -> Result<Mat, VisionError> {
-        Ok(self.0.try_clone().expect("copy the known mask"))
+    fn mask(&mut self, _bgr: &Mat, busy: bool) -> Result<Mat, VisionError> {
+        self.busy.push(busy);
+        Ok(self.mask.try_clone().expect("copy the known mask"))
     }
+}
+
+#[test]
+fn the_network_is_told_a_mosaic_is_busy_and_wood_is_not() {
+    let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+    let mut seen = Vec::new();
+    for background in [Background::Mosaic, Background::Wood] {
+        let scene = draw_scene(
+            480,
+            640,
+            background,
+            0.0,
+            vec![cable(curve.clone(), [40, 40, 220])],
+            7,
+        )
+        .unwrap();
+        let mut net = KnownMask::new(scene.union_mask.clone());
+        let out = Pipeline::new(keep_straight())
+            .detect(&scene.bgr, Some(&mut net))
+            .unwrap();
+        assert_eq!(out.mask_used, MaskMethod::Network);
+        seen.push((out.background.near_fraction, net.busy));
+    }
+    assert!(seen[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
+    assert!(seen[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
+    assert_eq!(
+        seen.iter()
+            .map(|(_, busy)| busy.clone())
+            .collect::<Vec<_>>(),
+        [vec![true], vec![false]]
+    );
 }
 
 #[test]
@@ -895,7 +940,7 @@ fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     )
     .unwrap();
 
-    let mut net = KnownMask(scene.union_mask.clone());
+    let mut net = KnownMask::new(scene.union_mask.clone());
     let mut auto = Pipeline::new(keep_straight());
     let out = auto.detect(&scene.bgr, Some(&mut net)).unwrap();
     assert!(!out.plain_background, "{:?}", out.background);
@@ -934,7 +979,7 @@ fn a_busy_background_takes_the_network_or_says_it_fell_back() {
 struct RedAndTopEdge;
 
 impl MaskNetwork for RedAndTopEdge {
-    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
+    fn mask(&mut self, bgr: &Mat, _busy: bool) -> Result<Mat, VisionError> {
         let mut red = Mat::default();
         core::in_range(
             bgr,
@@ -1030,7 +1075,7 @@ fn a_doubtful_classical_mask_on_a_plain_table_gives_way_to_the_network() {
         (scene_with([185, 175, 165], 1.0, 10.0), "ambiguous"),
         (scene_with([240; 3], 1.0, 16.0), "hollow"),
     ] {
-        let mut net = KnownMask(scene.union_mask.clone());
+        let mut net = KnownMask::new(scene.union_mask.clone());
         let out = auto.detect(&scene.bgr, Some(&mut net)).unwrap();
         assert!(out.plain_background, "{:?}", out.background);
         assert_eq!(out.mask_used, MaskMethod::Network, "{:?}", out.background);
@@ -1052,7 +1097,7 @@ fn a_doubtful_classical_mask_on_a_plain_table_gives_way_to_the_network() {
     // A dark matte cable on the same table is cut cleanly: the network
     // is skipped.
     let dark = scene_with([30; 3], 0.0, 10.0);
-    let mut net = KnownMask(dark.union_mask.clone());
+    let mut net = KnownMask::new(dark.union_mask.clone());
     let out = auto.detect(&dark.bgr, Some(&mut net)).unwrap();
     assert_eq!(out.mask_used, MaskMethod::Classical, "{:?}", out.notes);
     assert_each_followed(&out, &[curve], 2.0);

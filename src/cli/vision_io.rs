@@ -8,8 +8,8 @@ use cablecell::cell::{CellFile, load_cell_uncalibrated};
 use cablecell::detector::config::{DetectorBackend, VisionDetectorConfig};
 
 use cablecell::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE,
-    runtime_library,
+    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
+    MAX_INPUT_SCALE, runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{
@@ -43,6 +43,11 @@ pub struct VisionArgs {
     /// for 640×480; smaller is faster).
     #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
     pub net_scale: f64,
+    /// The same on a busy background, few of its pixels near one colour
+    /// (paint, prints), where the network tells cables from strokes better
+    /// when it looks closer [default: 0.5, or --net-scale where larger]
+    #[arg(long, value_parser = input_scale)]
+    pub busy_net_scale: Option<f64>,
     /// Superpixel side in cable widths, for `--instances superpixels`
     /// (smaller: more superpixels).
     #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
@@ -162,7 +167,10 @@ impl VisionArgs {
             self.model.clone(),
             runtime_library(self.onnxruntime.as_deref()),
         )
-        .tuned(self.threshold, self.net_scale)
+        .tuned(
+            self.threshold,
+            InputScales::new(self.net_scale, self.busy_net_scale),
+        )
     }
 }
 

@@ -5,15 +5,14 @@ use std::path::PathBuf;
 
 use nalgebra::{Point3, Unit, Vector3};
 use opencv::core::Rect;
-use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
 use crate::hw::camera::config::CalibrationConfig;
 use crate::perception::vision::calibration::CameraModel;
 use crate::perception::vision::grasp_frame::{ImageToBase, PlaneInBase};
 use crate::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork, MAX_INPUT_SCALE, input_scale_is_valid,
-    runtime_library,
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork, MAX_INPUT_SCALE,
+    input_scale_is_valid, runtime_library,
 };
 use crate::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
 use crate::schema::validate::{finite, non_negative, unit_vector3, vector3};
@@ -47,12 +46,19 @@ fn default_net_scale() -> f64 {
 }
 
 fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
-    let scale = f64::deserialize(deserializer)?;
+    scale_in_range("net_scale", f64::deserialize(deserializer)?)
+}
+
+fn busy_net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<f64>, D::Error> {
+    scale_in_range("busy_net_scale", f64::deserialize(deserializer)?).map(Some)
+}
+
+fn scale_in_range<E: serde::de::Error>(field: &str, scale: f64) -> Result<f64, E> {
     if input_scale_is_valid(scale) {
         Ok(scale)
     } else {
-        Err(D::Error::custom(format!(
-            "net_scale {scale} is outside (0, {MAX_INPUT_SCALE}]"
+        Err(E::custom(format!(
+            "{field} {scale} is outside (0, {MAX_INPUT_SCALE}]"
         )))
     }
 }
@@ -83,6 +89,12 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
+    /// The same on a busy background: paint, prints (default
+    /// [`crate::perception::vision::network::DEFAULT_BUSY_INPUT_SCALE`], or
+    /// `net_scale` where that is larger;
+    /// see [`InputScales`]).
+    #[serde(default, deserialize_with = "busy_net_scale")]
+    pub busy_net_scale: Option<f64>,
     /// Images are worked on at this width (px), shrunk or enlarged
     /// (default [`VisionConfig::work_width_px`]; 0: at their own size).
     #[serde(default = "default_work_width_px")]
@@ -134,7 +146,10 @@ impl VisionDetectorConfig {
             self.model.clone(),
             runtime_library(self.onnxruntime.as_deref()),
         )
-        .tuned(DEFAULT_THRESHOLD, self.net_scale)
+        .tuned(
+            DEFAULT_THRESHOLD,
+            InputScales::new(self.net_scale, self.busy_net_scale),
+        )
     }
 
     /// How image points become base-frame points for a camera at

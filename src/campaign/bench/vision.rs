@@ -23,7 +23,9 @@ use super::{StageLatency, mean, pareto_front};
 use crate::campaign::stats::Summary;
 use crate::hw::camera::{ImageError, read_image};
 use crate::perception::vision::eval::{GroundTruth, labelled_images, score, summarize};
-use crate::perception::vision::network::{DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, LazyNetwork};
+use crate::perception::vision::network::{
+    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
+};
 use crate::perception::vision::{
     InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError, VisionSkip,
 };
@@ -165,16 +167,21 @@ pub struct VisionSetting {
     pub group: &'static str,
     pub name: String,
     pub config: VisionConfig,
-    /// The network's input side over the image's; `None`: no network
+    /// The network's input sides over the image's; `None`: no network
     /// given (the classical mask).
-    pub input_scale: Option<f64>,
+    pub input_scales: Option<InputScales>,
     /// Work only on a region around the labelled cables (see
     /// [`roi_around_cables`]).
     pub roi_around_cables: bool,
 }
 
 impl VisionSetting {
-    fn new(group: &'static str, name: String, mask: MaskMethod, input_scale: Option<f64>) -> Self {
+    fn new(
+        group: &'static str,
+        name: String,
+        mask: MaskMethod,
+        input_scales: Option<InputScales>,
+    ) -> Self {
         VisionSetting {
             group,
             name,
@@ -182,16 +189,16 @@ impl VisionSetting {
                 mask,
                 ..VisionConfig::default()
             },
-            input_scale,
+            input_scales,
             roi_around_cables: false,
         }
     }
 }
 
 /// The settings compared on every image set: the classical mask, the
-/// network at three input sizes, cablecell's default (`auto` with the
-/// network at its default size), and the paper's superpixels for the
-/// instances. Each draws the cables' masks, which scoring needs (their
+/// network at three input sizes (busy backgrounds too), cablecell's
+/// default (`auto` with the network at its default sizes), and the paper's
+/// superpixels for the instances. Each draws the cables' masks, which scoring needs (their
 /// stage is timed but left out of the total: the cell's detector skips it).
 pub fn vision_settings() -> Vec<VisionSetting> {
     let network = |scale: f64| format!("network at {scale}×");
@@ -206,17 +213,19 @@ pub fn vision_settings() -> Vec<VisionSetting> {
             "input size",
             format!("{}, skeleton", network(scale)),
             MaskMethod::Network,
-            Some(scale),
+            Some(InputScales::fixed(scale)),
         ));
     }
+    let defaults = InputScales::default();
     settings.push(VisionSetting::new(
         "mask",
         format!(
-            "auto (cablecell's default: classical on a plain background, else the {}), skeleton",
-            network(DEFAULT_INPUT_SCALE)
+            "auto (cablecell's default: classical on a plain background, else the {}, {}× on a busy one), skeleton",
+            network(defaults.normal),
+            defaults.busy
         ),
         MaskMethod::Auto,
-        Some(DEFAULT_INPUT_SCALE),
+        Some(defaults),
     ));
     let mut superpixels = VisionSetting::new(
         "instances",
@@ -225,7 +234,7 @@ pub fn vision_settings() -> Vec<VisionSetting> {
             network(DEFAULT_INPUT_SCALE)
         ),
         MaskMethod::Network,
-        Some(DEFAULT_INPUT_SCALE),
+        Some(InputScales::fixed(DEFAULT_INPUT_SCALE)),
     );
     superpixels.config.instances = InstanceMethod::Superpixels;
     settings.push(superpixels);
@@ -237,7 +246,7 @@ pub fn vision_settings() -> Vec<VisionSetting> {
 /// image, and `auto` on a region of interest around the cables (see
 /// [`roi_around_cables`]) against the whole image.
 pub fn skip_settings() -> Vec<VisionSetting> {
-    let scale = Some(DEFAULT_INPUT_SCALE);
+    let scale = Some(InputScales::default());
     let mut roi = VisionSetting::new(
         "skip",
         "auto, a region of interest around the cables: the image outside it skipped".to_owned(),
@@ -254,9 +263,7 @@ pub fn skip_settings() -> Vec<VisionSetting> {
         ),
         VisionSetting::new(
             "skip",
-            format!(
-                "the network skip forced off: the network (at {DEFAULT_INPUT_SCALE}×) on every image"
-            ),
+            "the network skip forced off: the network on every image".to_owned(),
             MaskMethod::Network,
             scale,
         ),
@@ -388,9 +395,9 @@ pub fn run_vision(
 ) -> Result<Vec<VisionRow>, VisionBenchError> {
     let mut rows = Vec::with_capacity(settings.len());
     for setting in settings {
-        let mut network = setting.input_scale.map(|scale| {
+        let mut network = setting.input_scales.map(|scales| {
             LazyNetwork::new(model.to_path_buf(), runtime_library.to_path_buf())
-                .tuned(DEFAULT_THRESHOLD, scale)
+                .tuned(DEFAULT_THRESHOLD, scales)
         });
         let mut scores = Vec::with_capacity(set.images.len());
         let mut total_ms = Vec::with_capacity(set.images.len());

@@ -44,7 +44,8 @@ struct SweepRow {
 /// The settings the sweep compares: the mask method, the network's input
 /// size, the shipped 8-bit network or the float one it came from, the
 /// instance method and the superpixels' size, each varied from
-/// the command line's settings.
+/// the command line's settings. A row that names the network's input
+/// size runs it at that size on busy backgrounds too.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
         let mut args = base.clone();
@@ -64,6 +65,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
             with(&|a| {
                 a.mask = MaskArg::Network;
                 a.net_scale = scale;
+                a.busy_net_scale = Some(scale);
                 a.instances = InstancesArg::Skeleton;
             }),
         ));
@@ -76,6 +78,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
         with(&|a| {
             a.mask = MaskArg::Network;
             a.model = PathBuf::from(FLOAT_MODEL);
+            a.busy_net_scale = Some(base.net_scale);
             a.instances = InstancesArg::Skeleton;
         }),
     ));
@@ -89,6 +92,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
                 a.mask = MaskArg::Network;
                 a.instances = InstancesArg::Superpixels;
                 a.superpixel_widths = widths;
+                a.busy_net_scale = Some(base.net_scale);
             }),
         ));
     }

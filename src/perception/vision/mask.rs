@@ -59,6 +59,13 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 /// "Which background is plain".
 pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 
+/// A background with less than this fraction of the (downscaled, blurred)
+/// image within [`PLAIN_NEAR_LAB`] of its median colour is busy: paint,
+/// prints, mosaics. The rendered busy scenes score medians of 0.29 and
+/// 0.54, the photographs of cables on wood, cloth and paper 0.52 to 0.84
+/// (docs/vision.md, "Busy scenes: the paper's kind").
+pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
+
 /// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],
 /// of the window whose median colour is the local background: 15 (60 px
 /// at full size) is several widths of the thickest cable, so the median

@@ -42,6 +42,48 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// (README, the sweep table).
 pub const DEFAULT_INPUT_SCALE: f64 = 0.375;
 
+/// The network's input side over the image's on a busy background (see
+/// [`InputScales`]), unless set otherwise.
+pub const DEFAULT_BUSY_INPUT_SCALE: f64 = 0.5;
+
+/// The network's input scales: `normal`, and `busy` for an image whose
+/// background is busy (few of its pixels near one colour: paint, prints;
+/// [`crate::perception::vision::mask::BUSY_MAX_NEAR_FRACTION`]). There the
+/// network tells a cable from paint strokes of its colour better when it
+/// looks closer; elsewhere the smaller scale is faster and as good
+/// (docs/vision.md, "Busy scenes: the paper's kind").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InputScales {
+    pub normal: f64,
+    pub busy: f64,
+}
+
+impl InputScales {
+    /// `normal`, and `busy` when given, else [`DEFAULT_BUSY_INPUT_SCALE`]
+    /// or `normal` where that is larger: a busy scene is never looked at
+    /// less closely than a plain one.
+    pub fn new(normal: f64, busy: Option<f64>) -> Self {
+        Self {
+            normal,
+            busy: busy.unwrap_or(DEFAULT_BUSY_INPUT_SCALE.max(normal)),
+        }
+    }
+
+    /// One scale for every image.
+    pub fn fixed(scale: f64) -> Self {
+        Self {
+            normal: scale,
+            busy: scale,
+        }
+    }
+}
+
+impl Default for InputScales {
+    fn default() -> Self {
+        Self::new(DEFAULT_INPUT_SCALE, None)
+    }
+}
+
 /// The largest input scale the network is run at: twice the image's size
 /// is already far past what the model was trained on.
 pub const MAX_INPUT_SCALE: f64 = 2.0;
@@ -456,27 +498,27 @@ pub struct LazyNetwork {
     model: PathBuf,
     runtime_library: PathBuf,
     threshold: f32,
-    input_scale: f64,
+    input_scales: InputScales,
     loaded: Option<SegmentationNet>,
 }
 
 impl LazyNetwork {
-    /// The network at its default threshold and input scale.
+    /// The network at its default threshold and input scales.
     pub fn new(model: PathBuf, runtime_library: PathBuf) -> Self {
         Self {
             model,
             runtime_library,
             threshold: DEFAULT_THRESHOLD,
-            input_scale: DEFAULT_INPUT_SCALE,
+            input_scales: InputScales::default(),
             loaded: None,
         }
     }
 
-    /// The same with another probability threshold and input scale.
-    pub fn tuned(self, threshold: f32, input_scale: f64) -> Self {
+    /// The same with another probability threshold and input scales.
+    pub fn tuned(self, threshold: f32, input_scales: InputScales) -> Self {
         Self {
             threshold,
-            input_scale,
+            input_scales,
             ..self
         }
     }
@@ -493,7 +535,7 @@ impl LazyNetwork {
                 let mut net = SegmentationNet::load(&self.model, &self.runtime_library)
                     .map_err(|source| VisionError::Network { source })?;
                 net.threshold = self.threshold;
-                net.input_scale = self.input_scale;
+                net.input_scale = self.input_scales.normal;
                 net
             }
         };
@@ -502,8 +544,11 @@ impl LazyNetwork {
 }
 
 impl MaskNetwork for LazyNetwork {
-    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
-        MaskNetwork::mask(self.load()?, bgr)
+    fn mask(&mut self, bgr: &Mat, busy: bool) -> Result<Mat, VisionError> {
+        let scales = self.input_scales;
+        let net = self.load()?;
+        net.input_scale = if busy { scales.busy } else { scales.normal };
+        MaskNetwork::mask(net, bgr, busy)
     }
 
     fn threshold(&self) -> f64 {
@@ -515,7 +560,8 @@ impl MaskNetwork for LazyNetwork {
 /// pipeline cuts at [`SegmentationNet::threshold`] and which weigh each
 /// detection's confidence.
 impl MaskNetwork for SegmentationNet {
-    fn mask(&mut self, bgr: &Mat) -> Result<Mat, VisionError> {
+    /// At its one [`SegmentationNet::input_scale`], busy or not.
+    fn mask(&mut self, bgr: &Mat, _busy: bool) -> Result<Mat, VisionError> {
         self.probability(bgr)
             .map_err(|source| VisionError::Network { source })
     }
