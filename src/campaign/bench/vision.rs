@@ -197,9 +197,10 @@ impl VisionSetting {
 
 /// The settings compared on every image set: the classical mask, the
 /// network at three input sizes (busy backgrounds too), cablecell's
-/// default (`auto` with the network at its default sizes), and the paper's
-/// superpixels for the instances. Each draws the cables' masks, which scoring needs (their
-/// stage is timed but left out of the total: the cell's detector skips it).
+/// default (`auto` with the network at its default sizes), and the
+/// paper's superpixels for the instances. Each draws the cables' masks,
+/// which scoring needs (their stage is timed but left out of the total:
+/// the cell's detector skips it).
 pub fn vision_settings() -> Vec<VisionSetting> {
     let network = |scale: f64| format!("network at {scale}×");
     let mut settings = vec![VisionSetting::new(

@@ -44,12 +44,13 @@ struct SweepRow {
 /// The settings the sweep compares: the mask method, the network's input
 /// size, the shipped 8-bit network or the float one it came from, the
 /// instance method and the superpixels' size, each varied from
-/// the command line's settings. A row that names the network's input
-/// size runs it at that size on busy backgrounds too.
+/// the command line's settings. Each row names the network's one input
+/// size, so it runs at that size on busy backgrounds too.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
         let mut args = base.clone();
         change(&mut args);
+        args.busy_net_scale = Some(args.net_scale);
         args
     };
     let mut settings = vec![(
@@ -65,7 +66,6 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
             with(&|a| {
                 a.mask = MaskArg::Network;
                 a.net_scale = scale;
-                a.busy_net_scale = Some(scale);
                 a.instances = InstancesArg::Skeleton;
             }),
         ));
@@ -78,7 +78,6 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
         with(&|a| {
             a.mask = MaskArg::Network;
             a.model = PathBuf::from(FLOAT_MODEL);
-            a.busy_net_scale = Some(base.net_scale);
             a.instances = InstancesArg::Skeleton;
         }),
     ));
@@ -92,7 +91,6 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
                 a.mask = MaskArg::Network;
                 a.instances = InstancesArg::Superpixels;
                 a.superpixel_widths = widths;
-                a.busy_net_scale = Some(base.net_scale);
             }),
         ));
     }
