@@ -61,9 +61,9 @@ pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 
 /// A background with less than this fraction of the (downscaled, blurred)
 /// image within [`PLAIN_NEAR_LAB`] of its median colour is busy: paint,
-/// prints, mosaics. The rendered busy scenes score medians of 0.29 and
-/// 0.54, the photographs of cables on wood, cloth and paper 0.52 to 0.84
-/// (docs/vision.md, "Busy scenes: the paper's kind").
+/// prints, mosaics. It sits below what photographs of cables on wood,
+/// cloth and paper score (docs/vision.md, "Busy scenes: the paper's
+/// kind", gives the figures).
 pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 
 /// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],
