@@ -379,6 +379,11 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     assert!(text.contains("start-up: "), "{text}");
     assert!(text.contains("Network mask"), "{text}");
     assert!(text.contains("cable 0: grasp at ("), "{text}");
+    let cable_line = text
+        .lines()
+        .find(|line| line.contains("cable 0: grasp at ("))
+        .expect("a cable's line");
+    assert!(cable_line.contains(", confidence "), "{text}");
 
     // The cell's own settings (its region of interest, network scale and
     // straight edges kept) see what the task's detect state saw: its one

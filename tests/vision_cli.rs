@@ -110,6 +110,14 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
         "{printed}"
     );
     assert!(lines[2].starts_with("  cable 0: grasp at ("), "{printed}");
+    // The cable's confidence, as in the JSON report.
+    let confidence = reports[0]["cables"][0]["confidence"]
+        .as_f64()
+        .expect("a confidence in the JSON report");
+    assert!(
+        lines[2].ends_with(&format!(", confidence {confidence:.2}")),
+        "{printed}"
+    );
     // The spline: its control points, and points at s = 0, 0.1, ..., 1
     // from the end with the smaller x, the middle one the grasp point.
     let points = |line: &str, label: &str| -> Vec<[f64; 2]> {

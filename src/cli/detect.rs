@@ -222,11 +222,12 @@ fn print_report(report: &ImageReport) {
     );
     for (k, cable) in report.cables.iter().enumerate() {
         outln!(
-            "  cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {} control points",
+            "  cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {} control points, confidence {:.2}",
             cable.grasp_px[0],
             cable.grasp_px[1],
             cable.direction_rad,
-            cable.spline.control_points.len()
+            cable.spline.control_points.len(),
+            cable.confidence
         );
         outln!(
             "    control points (px): {}",

@@ -148,11 +148,12 @@ fn detect_again(
                 );
                 for (k, cable) in output.cables.iter().enumerate() {
                     outln!(
-                        "    cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {:.0} px long",
+                        "    cable {k}: grasp at ({:.1}, {:.1}) px, direction {:+.3} rad, {:.0} px long, confidence {:.2}",
                         cable.grasp_px[0],
                         cable.grasp_px[1],
                         cable.direction_rad,
-                        cable.length_px
+                        cable.length_px,
+                        cable.confidence
                     );
                 }
             }
