@@ -277,10 +277,10 @@ fn a_wrong_image_is_reported() {
 
 /// The held-out photographs 00030..00044 of cables-dev (not used in
 /// training): mean union DICE at threshold 0.5 and the default input size.
-/// Measured with the shipped model: DICE 0.6689, IoU 0.5046
+/// Measured with the shipped model: DICE 0.6745, IoU 0.5107
 /// (models/README.md says why the labels hold it there); this allows 0.02
 /// less.
-const HELD_OUT_MIN_DICE: f64 = 0.645;
+const HELD_OUT_MIN_DICE: f64 = 0.654;
 
 #[test]
 #[ignore = "needs the cables-dev photographs in ../shared/data; scripts/test runs it when they are there"]
@@ -312,20 +312,23 @@ fn held_out_real_photographs() {
 
 /// The whole pipeline with the shipped model on the held-out photographs,
 /// default settings (`eval-vision --from 00030 --to 00044`). Measured:
-/// union DICE 0.701, the count right in 11 of 15, grasp points 2.8 px from
-/// the labelled centre lines on average (models/README.md says why the
-/// first two are low); the bounds allow a little drift, keep the grasp
-/// point inside the 5 px goal, and fail on a worse model or pipeline. Of
-/// the 95 labelled cables, 5 are not found, all pieces of 56–76 px at the
-/// border, shorter than the 90 px under which a cable running out of view
-/// is dropped; of the 94 found, 4 match no label. Of the labelled centre
-/// lines' length, 91.6 % lies within 5 px of a found one, and 91.8 % of
-/// the found length within 5 px of a labelled one. The labels lie above
-/// the wires found: the found masks match them best moved up by 0.87 px
-/// on average (by 0–2 px in each image), at a mean union DICE of 0.721.
-const HELD_OUT_PIPELINE_DICE: f64 = 0.685;
-const HELD_OUT_PIPELINE_LENGTH_SHARE: f64 = 0.90;
-const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 8;
+/// union DICE 0.692, the count right in 8 of 15, grasp points 4.1 px from
+/// the labelled centre lines on average, 20.6 px of it in 00031, where the
+/// folder's punched edge is taken for a cable (models/README.md says why
+/// the first two are low, and why this network was shipped against the
+/// one before it, which counted 11); the bounds allow a little drift, keep
+/// the grasp point inside the 5 px goal, and fail on a worse model or
+/// pipeline. Of the 95 labelled cables, 5 are not found, all pieces of
+/// 56–86 px at the border, shorter than the 90 px under which a cable
+/// running out of view is dropped; of the 94 found, 4 match no label. Of
+/// the labelled centre lines' length, 90.1 % lies within 5 px of a found
+/// one, and 90.2 % of the found length within 5 px of a labelled one. The
+/// labels lie above the wires found: the found masks match them best moved
+/// up by 1.07 px on average (by 0–3 px in each image), at a mean union
+/// DICE of 0.714.
+const HELD_OUT_PIPELINE_DICE: f64 = 0.68;
+const HELD_OUT_PIPELINE_LENGTH_SHARE: f64 = 0.89;
+const HELD_OUT_PIPELINE_COUNT_RIGHT: usize = 7;
 const HELD_OUT_PIPELINE_GRASP_PX: f64 = 4.5;
 const HELD_OUT_PIPELINE_MISSED: usize = 7;
 const HELD_OUT_PIPELINE_UNLABELLED: usize = 5;
