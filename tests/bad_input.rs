@@ -265,6 +265,15 @@ fn a_negative_straight_edge_radius_is_refused_at_its_line() {
 }
 
 #[test]
+fn a_confidence_floor_outside_0_to_1_is_refused_at_its_line() {
+    assert_cell_refused_at_its_line(
+        "straight_edge_radius_px = 0.0",
+        "straight_edge_radius_px = 0.0\nmin_confidence = 1.5",
+        "expected a fraction in [0, 1], found 1.5",
+    );
+}
+
+#[test]
 fn a_region_of_interest_outside_the_camera_image_is_refused_at_its_line() {
     for roi in [
         "[400, 270, 360, 110]",

@@ -430,4 +430,37 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     for (a, b) in by_detect.iter().zip(&by_task) {
         assert!((a - b).abs() < 1e-6, "{by_detect:?} against {by_task:?}");
     }
+
+    // The cell's confidence floor is the cell's too: above the cable's
+    // confidence, `detect --cell` drops it, whatever the command line says.
+    let cell = std::fs::read_to_string(common::root().join("config/cell.sim.toml")).unwrap();
+    let floor = (confidence + 1.0) / 2.0;
+    let strict = cell.replacen(
+        "straight_edge_radius_px = 0.0",
+        &format!("straight_edge_radius_px = 0.0\nmin_confidence = {floor}"),
+        1,
+    );
+    assert_ne!(
+        strict, cell,
+        "the shipped cell sets straight_edge_radius_px"
+    );
+    let model = common::root().join("models/cable_segmentation.onnx");
+    let strict = strict.replacen(
+        "\"../models/cable_segmentation.onnx\"",
+        &format!("{:?}", model.to_str().unwrap()),
+        1,
+    );
+    let strict_cell = dir.path().join("strict.toml");
+    std::fs::write(&strict_cell, strict).unwrap();
+    let report = common::json_of(&[
+        "detect",
+        image.to_str().unwrap(),
+        "--cell",
+        strict_cell.to_str().unwrap(),
+        "--min-confidence",
+        "0",
+        "--json",
+    ]);
+    let found = &report["images"][0];
+    assert_eq!(found["cables"].as_array().unwrap().len(), 0, "{report}");
 }

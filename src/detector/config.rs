@@ -15,7 +15,7 @@ use crate::perception::vision::network::{
     input_scale_is_valid, runtime_library,
 };
 use crate::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
-use crate::schema::validate::{finite, non_negative, unit_vector3, vector3};
+use crate::schema::validate::{finite, fraction, non_negative, unit_vector3, vector3};
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -39,6 +39,10 @@ fn default_straight_edge_radius_px() -> f64 {
 
 fn default_work_width_px() -> u32 {
     VisionConfig::default().work_width_px
+}
+
+fn default_min_confidence() -> f64 {
+    VisionConfig::default().min_confidence
 }
 
 fn default_net_scale() -> f64 {
@@ -110,6 +114,13 @@ pub struct VisionDetectorConfig {
         deserialize_with = "non_negative"
     )]
     pub straight_edge_radius_px: f64,
+    /// Detections less confident than this, 0 to 1, are dropped as
+    /// probably not cables (default
+    /// [`crate::perception::vision::DEFAULT_MIN_CONFIDENCE`]); 0 keeps
+    /// them all. A cell that holds its one cable in a fixture may trust a
+    /// fainter detection than a busy scene can.
+    #[serde(default = "default_min_confidence", deserialize_with = "fraction")]
+    pub min_confidence: f64,
     /// The plane the cable lies in, known from the fixture (the paper's
     /// "known distance" of the cable from the camera): a grasp point's ray
     /// from the camera meets it at the grasp point in the base frame.
@@ -134,6 +145,7 @@ impl VisionDetectorConfig {
                 .map(|[x, y, width, height]| Rect::new(x, y, width, height)),
             work_width_px: self.work_width_px,
             straight_edge_radius_px: self.straight_edge_radius_px,
+            min_confidence: self.min_confidence,
             cable_masks,
             ..VisionConfig::default()
         })
