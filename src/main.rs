@@ -175,9 +175,9 @@ enum Command {
         vision: cli::vision_io::VisionArgs,
         /// A cell file whose calibrated camera took the images: the cell's
         /// own vision settings (region of interest, network, its scale,
-        /// straight edges, confidence floor) replace the options above, so that the cables
-        /// are those the task's detect state finds, and each grasp frame is
-        /// also given in the robot's base frame.
+        /// straight edges, confidence floor) replace the options above, so
+        /// that the cables are those the task's detect state finds, and each
+        /// grasp frame is also given in the robot's base frame.
         #[arg(long)]
         cell: Option<PathBuf>,
         /// Print one JSON object of reports.

@@ -404,13 +404,13 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
 
     let image = dir.path().join("camera.png");
     std::fs::write(&image, &images[0].data).unwrap();
-    let report = common::json_of(&[
-        "detect",
-        image.to_str().unwrap(),
-        "--cell",
-        "config/cell.sim.toml",
-        "--json",
-    ]);
+    // `detect --json` on the recorded image with the cell file `cell`.
+    let detect_with = |cell: &str, options: &[&str]| {
+        let mut args = vec!["detect", image.to_str().unwrap(), "--cell", cell, "--json"];
+        args.extend_from_slice(options);
+        common::json_of(&args)
+    };
+    let report = detect_with("config/cell.sim.toml", &[]);
     let found = &report["images"][0];
     assert_eq!(found["cables"].as_array().unwrap().len(), 1, "{report}");
     let confidence = found["cables"][0]["confidence"].as_f64().unwrap();
@@ -452,15 +452,7 @@ fn a_vision_run_records_its_camera_image_and_replay_detects_again() {
     );
     let strict_cell = dir.path().join("strict.toml");
     std::fs::write(&strict_cell, strict).unwrap();
-    let report = common::json_of(&[
-        "detect",
-        image.to_str().unwrap(),
-        "--cell",
-        strict_cell.to_str().unwrap(),
-        "--min-confidence",
-        "0",
-        "--json",
-    ]);
+    let report = detect_with(strict_cell.to_str().unwrap(), &["--min-confidence", "0"]);
     let found = &report["images"][0];
     assert_eq!(found["cables"].as_array().unwrap().len(), 0, "{report}");
 }
