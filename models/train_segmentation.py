@@ -192,6 +192,16 @@ def load_synthetic(folder: Path, limit: int) -> tuple[list[np.ndarray], list[np.
     return load_stems(folder, stems, (NET_W, NET_H))
 
 
+def load_folders(folders: list[Path], limit: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The first `limit` images of each rendered folder, as one set."""
+    images, masks = [], []
+    for folder in folders:
+        more_images, more_masks = load_synthetic(folder, limit)
+        images.extend(more_images)
+        masks.extend(more_masks)
+    return images, masks
+
+
 def recolour_background(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """The image with everything but the cables given one random, strong
     hue, its shading kept: pale cables on coloured paper, which the real
@@ -392,12 +402,8 @@ def train(args) -> CableNet:
     t0 = time.time()
     train_ids = [i for i in PHOTO_IDS if i not in args.held_out]
     real = load_real(args.data, train_ids, (NET_W, NET_H))
-    synth = ([], [])
-    for folder in args.synthetic:
-        images, masks = load_synthetic(folder, args.synthetic_count)
-        synth[0].extend(images)
-        synth[1].extend(masks)
-    busy = load_synthetic(args.busy, args.synthetic_count) if args.busy else None
+    synth = load_folders(args.synthetic, args.synthetic_count)
+    busy = load_folders(args.busy, args.synthetic_count) if args.busy else None
     cutouts = load_cutouts(args.data, train_ids) if busy is not None else []
     print(f"data: {len(real[0])} real, {len(synth[0])} synthetic, {len(busy[0]) if busy else 0} busy, "
           f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
@@ -552,9 +558,9 @@ def main() -> int:
                         help="photographs of cables-dev kept out of training and measured, e.g. 30-44 "
                              "(the default), 0-14, or none to train on all 45")
     parser.add_argument("--real-fraction", type=float, default=0.5, help="share of real images in a batch")
-    parser.add_argument("--busy", type=Path,
-                        help="a folder written by `cablecell render-dataset --backgrounds busy`: the paper's kind "
-                             "of scene, with the training photographs' cables pasted over it")
+    parser.add_argument("--busy", type=Path, nargs="+",
+                        help="folders written by `cablecell render-dataset --backgrounds busy`, drawn from as one "
+                             "set: the paper's kind of scene, with the training photographs' cables pasted over it")
     parser.add_argument("--busy-fraction", type=float, default=0.3, help="share of busy rendered images in a batch")
     parser.add_argument("--paste-fraction", type=float, default=0.5,
                         help="share of busy images that get real cables pasted over them")
