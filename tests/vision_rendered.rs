@@ -182,7 +182,7 @@ fn loops_in_rendered_scenes_are_counted_right() {
     // another cable, which merging an overlap whose junctions belong to
     // another crossing got wrong. (00053 of seed 21, eight branches of
     // three cables at one junction, checked that a loop's ends are kept
-    // apart only at four branches; the network shipped now marks that
+    // apart only at four branches; the network shipped then marks that
     // image's crossings otherwise, and it is miscounted at its top border
     // whatever that rule does, so it no longer checks the rule.)
     for (seed, index) in [(21, 87), (61, 169)] {

@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""Averages the weights of float cable segmentation networks, then quantizes the average.
+
+Networks fine-tuned from one another lie close enough in weight space that
+their average is a network too, and often a better one than either: the
+network shipped now is the average of two (models/README.md, "The network
+shipped now"). The networks must have the same layers; train_segmentation.py
+writes them as NAME_float.onnx. Run from the project's root, e.g.
+    .venv-train/bin/python models/average_segmentation.py A_float.onnx B_float.onnx \
+        --out models/cable_segmentation.onnx
+It writes the float average beside OUT, as OUT_STEM_float.onnx, and the
+8-bit network, quantized as quantize_segmentation.py does, to OUT.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import onnx
+from onnx import numpy_helper
+
+from quantize_segmentation import quantize
+
+
+def average(paths: list[Path]) -> onnx.ModelProto:
+    """The first model with each float weight replaced by the mean of that
+    weight over all the models."""
+    models = [onnx.load(str(p)) for p in paths]
+    weights = [{w.name: numpy_helper.to_array(w) for w in m.graph.initializer} for m in models]
+    out = models[0]
+    for w in out.graph.initializer:
+        values = []
+        for path, named in zip(paths, weights):
+            if w.name not in named or named[w.name].shape != weights[0][w.name].shape:
+                raise ValueError(f"{path}: no weight {w.name} of shape {weights[0][w.name].shape}: "
+                                 f"not the same layers as {paths[0]}")
+            values.append(named[w.name])
+        if values[0].dtype.kind == "f":
+            mean = sum(v.astype("float64") for v in values) / len(values)
+            w.CopyFrom(numpy_helper.from_array(mean.astype(values[0].dtype), w.name))
+    return out
+
+
+def main() -> int:
+    here = Path(__file__).resolve().parent
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("models", type=Path, nargs="+", help="float ONNX networks with the same layers")
+    parser.add_argument("--data", type=Path, default=here.parent.parent / "shared" / "data" / "cables-dev",
+                        help="the cables-dev folder, for quantization's calibration "
+                             "(default: ../shared/data/cables-dev from the project's root)")
+    parser.add_argument("--out", type=Path, default=here / "cable_segmentation.onnx",
+                        help="the 8-bit average; the float one is written beside it as OUT_STEM_float.onnx")
+    args = parser.parse_args()
+    if len(args.models) < 2:
+        print("give two or more networks to average", file=sys.stderr)
+        return 2
+    for path in args.models:
+        if not path.is_file():
+            print(f"no network at {path}", file=sys.stderr)
+            return 2
+    if not args.data.is_dir():
+        print(f"no data at {args.data}", file=sys.stderr)
+        return 2
+    try:
+        mean = average(args.models)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return 2
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    float_out = args.out.with_name(f"{args.out.stem}_float.onnx")
+    onnx.save(mean, str(float_out))
+    print(f"averaged {len(args.models)} networks into {float_out}", flush=True)
+    quantize(float_out, args.out, args.data)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
