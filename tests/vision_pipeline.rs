@@ -928,6 +928,42 @@ fn the_network_is_told_a_mosaic_is_busy_and_wood_is_not() {
 }
 
 #[test]
+fn a_straight_cable_on_a_busy_background_is_kept_and_on_wood_dropped_as_an_edge() {
+    // A ruler-straight 400 px cable, as a network would mark it.
+    let line = segment_px([120.0, 240.0], [520.0, 240.0]);
+    let mut kept = Vec::new();
+    for background in [Background::Mosaic, Background::Wood] {
+        let scene = draw_scene(
+            480,
+            640,
+            background,
+            0.0,
+            vec![cable(line.clone(), [40, 40, 220])],
+            7,
+        )
+        .unwrap();
+        let mut net = KnownMask::new(scene.union_mask.clone());
+        let out = Pipeline::new(VisionConfig::default())
+            .detect(&scene.bgr, Some(&mut net))
+            .unwrap();
+        assert_eq!(out.mask_used, MaskMethod::Network);
+        let followed = each_followed(&out, std::slice::from_ref(&line), 2.5).is_ok();
+        kept.push((out.background.near_fraction, followed, out.notes));
+    }
+    // Paint and prints are busy: a straight line there is as likely a
+    // cable as an edge. Wood is not: its straight lines are a table's
+    // or a sheet's edges.
+    assert!(kept[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
+    assert!(kept[0].1 && kept[0].2.is_empty(), "{kept:?}");
+    assert!(kept[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
+    assert!(!kept[1].1, "{kept:?}");
+    assert!(
+        kept[1].2.iter().any(|n| n.contains("1 straight detection")),
+        "{kept:?}"
+    );
+}
+
+#[test]
 fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
     let scene = draw_scene(

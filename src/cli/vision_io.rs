@@ -68,8 +68,9 @@ pub struct VisionArgs {
     pub min_border_length_px: f64,
     /// Drop detections straighter than an arc of this radius (px), or within
     /// 1.5 px of straight: edges of paper and tables (on a plain background,
-    /// a light's falloff aside, only when the two sides differ); 0 keeps
-    /// them (for a cable held taut).
+    /// a light's falloff aside, only when the two sides differ; never on a
+    /// busy one: paint, prints, mosaics); 0 keeps them (for a cable held
+    /// taut).
     #[arg(long, default_value_t = VisionConfig::default().straight_edge_radius_px, value_parser = length_px)]
     pub straight_edge_radius_px: f64,
     /// Drop detections less confident than this (0 to 1; see `detect`'s

@@ -69,8 +69,10 @@ pub struct VisionConfig {
     /// arc). On a background plain around each pixel off the cables (see
     /// [`mask::plain_locally`]), such a path is kept when the background is
     /// alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has two
-    /// different sides. 0 keeps every path: for a cell whose cable is
-    /// held taut.
+    /// different sides. On a busy background (paint, prints, mosaics; see
+    /// [`mask::BUSY_MAX_NEAR_FRACTION`]) every path is kept: the edges this
+    /// is for lie on tables, and it dropped the straight cables on paint.
+    /// 0 keeps every path: for a cell whose cable is held taut.
     pub straight_edge_radius_px: f64,
     /// Mask blobs smaller than this are dropped as noise before the
     /// instances are looked for.

@@ -21,6 +21,17 @@ use crate::perception::vision::error::{VisionError, cv};
 use crate::perception::vision::spline::{self, BSpline};
 use crate::perception::vision::{mask, paths, skeleton, superpixels};
 
+/// What a mask may hold besides cables that looks like one.
+#[derive(Clone, Copy)]
+struct LookAlikes {
+    /// Paint strokes as long and even as cables (see
+    /// [`confidence::strokes_possible`]).
+    strokes: bool,
+    /// Edges of paper and tables, as straight as a taut cable (see
+    /// [`VisionConfig::straight_edge_radius_px`]).
+    edges: bool,
+}
+
 impl Pipeline {
     /// Finds the cables in a BGR image (gray, BGRA and 16-bit are accepted
     /// and converted). `network`: how to get a network mask when the
@@ -65,15 +76,13 @@ impl Pipeline {
         )?;
         timings_ms.push(("mask", ms_since(start)));
 
-        let strokes_possible = confidence::strokes_possible(mask_used, &background);
-        let found = self.cables_in(
-            &work,
-            &mask_roi,
-            strokes_possible,
-            belief.as_ref(),
-            roi,
-            full,
-        )?;
+        let look_alikes = LookAlikes {
+            strokes: confidence::strokes_possible(mask_used, &background),
+            // Paper and table edges lie on tables; on paint, prints and
+            // mosaics a straight detection is a cable.
+            edges: background.near_fraction >= mask::BUSY_MAX_NEAR_FRACTION,
+        };
+        let found = self.cables_in(&work, &mask_roi, look_alikes, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
         if found.straight_dropped > 0 {
             notes.push(format!(
@@ -175,13 +184,16 @@ impl Pipeline {
             }
             None => Cow::Borrowed(mask),
         };
-        self.cables_in(&image, mask, false, None, full, full)
+        let look_alikes = LookAlikes {
+            strokes: false,
+            edges: true,
+        };
+        self.cables_in(&image, mask, look_alikes, None, full, full)
     }
 
     /// Instances, splines and per-cable masks for `mask_roi`, the mask of
-    /// `image_roi` (with the network's `belief` when it made the mask;
-    /// `strokes_possible` when it may hold paint strokes as long and even
-    /// as cables, see [`confidence::strokes_possible`]),
+    /// `image_roi` (with the network's `belief` when it made the mask, and
+    /// what else it may hold that looks like a cable),
     /// region `roi` of an image of extent `full`, perhaps resized (see
     /// [`VisionConfig::work_width_px`]): what is found is given in the
     /// image's pixels.
@@ -189,7 +201,7 @@ impl Pipeline {
         &self,
         image_roi: &Mat,
         mask_roi: &Mat,
-        strokes_possible: bool,
+        look_alikes: LookAlikes,
         belief: Option<&Belief>,
         roi: Rect,
         full: Rect,
@@ -242,7 +254,7 @@ impl Pipeline {
                 belief,
                 &path.points_px,
                 path.length_px,
-                strokes_possible.then_some(found.width_px),
+                look_alikes.strokes.then_some(found.width_px),
             );
             if confidence < self.config.min_confidence {
                 unconfident_dropped += 1;
@@ -253,17 +265,20 @@ impl Pipeline {
                 continue;
             };
             let samples_px = spline.sample(self.config.samples_per_cable);
-            if looks_like_edge(
-                &samples_px,
-                path.length_px,
-                self.config.straight_edge_radius_px,
-            ) && !straight_cable(
-                image_roi,
-                mask_roi,
-                &samples_px,
-                found.width_px,
-                &mut plain_around,
-            )? {
+            if look_alikes.edges
+                && looks_like_edge(
+                    &samples_px,
+                    path.length_px,
+                    self.config.straight_edge_radius_px,
+                )
+                && !straight_cable(
+                    image_roi,
+                    mask_roi,
+                    &samples_px,
+                    found.width_px,
+                    &mut plain_around,
+                )?
+            {
                 straight_dropped += 1;
                 continue;
             }

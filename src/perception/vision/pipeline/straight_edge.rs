@@ -2,7 +2,8 @@
 //! paper, folders and tables for cables, and a cable lying loose is never
 //! that straight (see [`VisionConfig::straight_edge_radius_px`]). On a
 //! background plain around each pixel, a straight detection whose two
-//! sides are alike is a taut cable, kept.
+//! sides are alike is a taut cable, kept; on a busy one (paint, prints,
+//! mosaics) every straight detection is, since the edges lie on tables.
 //!
 //! [`VisionConfig::straight_edge_radius_px`]: super::VisionConfig::straight_edge_radius_px
 
