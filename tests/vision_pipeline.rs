@@ -896,26 +896,38 @@ impl MaskNetwork for KnownMask {
     }
 }
 
+/// A red cable along `curve` drawn on `background`, found with a network
+/// that marks exactly it: what the pipeline made of it, and whether the
+/// network was told, each time it was asked, that the background is busy.
+fn by_known_network(
+    background: Background,
+    curve: &[[f64; 2]],
+    config: VisionConfig,
+) -> (VisionOutput, Vec<bool>) {
+    let scene = draw_scene(
+        480,
+        640,
+        background,
+        0.0,
+        vec![cable(curve.to_vec(), [40, 40, 220])],
+        7,
+    )
+    .unwrap();
+    let mut net = KnownMask::new(scene.union_mask.clone());
+    let out = Pipeline::new(config)
+        .detect(&scene.bgr, Some(&mut net))
+        .unwrap();
+    assert_eq!(out.mask_used, MaskMethod::Network);
+    (out, net.busy)
+}
+
 #[test]
 fn the_network_is_told_a_mosaic_is_busy_and_wood_is_not() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
     let mut seen = Vec::new();
     for background in [Background::Mosaic, Background::Wood] {
-        let scene = draw_scene(
-            480,
-            640,
-            background,
-            0.0,
-            vec![cable(curve.clone(), [40, 40, 220])],
-            7,
-        )
-        .unwrap();
-        let mut net = KnownMask::new(scene.union_mask.clone());
-        let out = Pipeline::new(keep_straight())
-            .detect(&scene.bgr, Some(&mut net))
-            .unwrap();
-        assert_eq!(out.mask_used, MaskMethod::Network);
-        seen.push((out.background.near_fraction, net.busy));
+        let (out, busy) = by_known_network(background, &curve, keep_straight());
+        seen.push((out.background.near_fraction, busy));
     }
     assert!(seen[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
     assert!(seen[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
@@ -933,20 +945,7 @@ fn a_straight_cable_on_a_busy_background_is_kept_and_on_wood_dropped_as_an_edge(
     let line = segment_px([120.0, 240.0], [520.0, 240.0]);
     let mut kept = Vec::new();
     for background in [Background::Mosaic, Background::Wood] {
-        let scene = draw_scene(
-            480,
-            640,
-            background,
-            0.0,
-            vec![cable(line.clone(), [40, 40, 220])],
-            7,
-        )
-        .unwrap();
-        let mut net = KnownMask::new(scene.union_mask.clone());
-        let out = Pipeline::new(VisionConfig::default())
-            .detect(&scene.bgr, Some(&mut net))
-            .unwrap();
-        assert_eq!(out.mask_used, MaskMethod::Network);
+        let (out, _) = by_known_network(background, &line, VisionConfig::default());
         let followed = each_followed(&out, std::slice::from_ref(&line), 2.5).is_ok();
         kept.push((out.background.near_fraction, followed, out.notes));
     }

@@ -119,6 +119,14 @@ pub struct BackgroundStats {
     pub ambiguous_ratio: f64,
 }
 
+impl BackgroundStats {
+    /// Whether the background is busy: paint, prints, mosaics (see
+    /// [`BUSY_MAX_NEAR_FRACTION`]).
+    pub fn busy(&self) -> bool {
+        self.near_fraction < BUSY_MAX_NEAR_FRACTION
+    }
+}
+
 /// Brings any supported image to 8-bit, 3-channel BGR, so the later stages
 /// see one pixel format: gray and BGRA are converted, 16-bit scaled down;
 /// an image already 8-bit BGR is borrowed, not copied.

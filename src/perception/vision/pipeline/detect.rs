@@ -80,7 +80,7 @@ impl Pipeline {
             strokes: confidence::strokes_possible(mask_used, &background),
             // Paper and table edges lie on tables; on paint, prints and
             // mosaics a straight detection is a cable.
-            edges: background.near_fraction >= mask::BUSY_MAX_NEAR_FRACTION,
+            edges: !background.busy(),
         };
         let found = self.cables_in(&work, &mask_roi, look_alikes, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);

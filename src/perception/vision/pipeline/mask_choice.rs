@@ -62,7 +62,7 @@ pub(super) fn choose_mask(
     notes: &mut Vec<String>,
 ) -> Result<MaskChoice, VisionError> {
     let background = mask::background_stats(work)?;
-    let busy = background.near_fraction < mask::BUSY_MAX_NEAR_FRACTION;
+    let busy = background.busy();
     let network_mask =
         |net: &mut dyn MaskNetwork| network_mask(net, work, view, busy, min_blob_area_px);
     let (found, used, background) = match (method, network) {
