@@ -1,8 +1,8 @@
 //! What both instance methods (skeleton and superpixels) do with the pixel
 //! paths they find, before splines are fitted: paths that run along the
 //! image border are cut there, pieces that continue each other across a
-//! short gap (a mask broken at a ferrule, a glint or a crossing) are joined
-//! into one cable, and short scraps are dropped.
+//! gap (a mask broken at a ferrule, a glint, a crossing or paint of the
+//! cable's colour) are joined into one cable, and short scraps are dropped.
 
 use opencv::core::{Mat, Vec3b};
 use opencv::imgproc;
@@ -20,6 +20,13 @@ const JOIN_GAP_EXTRA_PX: f64 = 4.0;
 /// Paths continue each other when neither end, nor the step between them,
 /// turns by more than this.
 const JOIN_MAX_BEND_RAD: f64 = 0.45;
+/// Ends further apart, up to this many cable widths, are joined when they
+/// continue each other to within [`LONG_GAP_MAX_BEND_RAD`] and, given the
+/// image, are of one colour (see [`UNDER_MAX_DELTA_E`]): a cable the mask
+/// lost for a stretch, against paint or print of its own colour or in a
+/// glint. So straight and so alike, two ends are rarely two cables.
+const LONG_GAP_WIDTHS: f64 = 15.0;
+const LONG_GAP_MAX_BEND_RAD: f64 = 0.25;
 /// Paths that turn by up to this also continue each other when the middle
 /// of the step lies on another cable (within half a width of its centre
 /// line, plus [`UNDER_EXTRA_PX`]) and, given the image, the two ends'
@@ -130,16 +137,18 @@ pub(super) fn tangent_span_px(width_px: f64) -> f64 {
 }
 
 /// Joins paths that continue each other across a short gap (see
-/// [`JOIN_GAP_WIDTHS`]), or bend under another cable (see
-/// [`JOIN_UNDER_MAX_BEND_RAD`]; by shape alone without the BGR `image`),
-/// best-aligned pair first, until no pair does. Each path's ends are
-/// looked at in both directions, so the result may run either way.
+/// [`JOIN_GAP_WIDTHS`]) or a longer one (see [`LONG_GAP_WIDTHS`]), or bend
+/// under another cable (see [`JOIN_UNDER_MAX_BEND_RAD`]), by shape alone
+/// without the BGR `image`, best-aligned pair first, until no pair does.
+/// Each path's ends are looked at in both directions, so the result may
+/// run either way.
 pub fn join_continuations(
     mut paths: Vec<Vec<[f64; 2]>>,
     image: Option<&Mat>,
     width_px: f64,
 ) -> Result<Vec<Vec<[f64; 2]>>, VisionError> {
     let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
+    let long_gap_px = LONG_GAP_WIDTHS * width_px;
     let span_px = tangent_span_px(width_px);
     loop {
         // Every path's two ends: (path, reversed?, end point, outward direction).
@@ -163,7 +172,7 @@ pub fn join_continuations(
                 }
                 let gap = [pb[0] - pa[0], pb[1] - pa[1]];
                 let gap_px = gap[0].hypot(gap[1]);
-                if gap_px > max_gap_px {
+                if gap_px > max_gap_px.max(long_gap_px) {
                     continue;
                 }
                 let onward = [-db[0], -db[1]];
@@ -176,10 +185,16 @@ pub fn join_continuations(
                 if best.is_some_and(|b| bend >= b.0) {
                     continue;
                 }
-                let joins = bend <= JOIN_MAX_BEND_RAD
-                    || (bend <= JOIN_UNDER_MAX_BEND_RAD
-                        && passes_under(&paths, [i, j], pa, pb, width_px)
-                        && ends_alike(image, [&paths[i], &paths[j]], [ri, rj], width_px)?);
+                let ends_pair = [&paths[i][..], &paths[j][..]];
+                let joins = if gap_px > max_gap_px {
+                    bend <= LONG_GAP_MAX_BEND_RAD
+                        && ends_alike(image, ends_pair, [ri, rj], width_px)?
+                } else {
+                    bend <= JOIN_MAX_BEND_RAD
+                        || (bend <= JOIN_UNDER_MAX_BEND_RAD
+                            && passes_under(&paths, [i, j], pa, pb, width_px)
+                            && ends_alike(image, ends_pair, [ri, rj], width_px)?)
+                };
                 if joins {
                     best = Some((bend, i, ri, j, rj));
                 }
@@ -450,9 +465,10 @@ mod tests {
             segment_px([110.0, 110.0], [110.0, 200.0]),
         ];
         assert_eq!(join_continuations(corner, None, 8.0).unwrap().len(), 2);
+        // In line, but more than 15 widths apart.
         let far = vec![
             segment_px([0.0, 100.0], [100.0, 100.0]),
-            segment_px([150.0, 100.0], [250.0, 100.0]),
+            segment_px([230.0, 100.0], [330.0, 100.0]),
         ];
         assert_eq!(join_continuations(far, None, 8.0).unwrap().len(), 2);
         // Side by side, parallel: their ends are close, but one does not
@@ -462,6 +478,38 @@ mod tests {
             segment_px([105.0, 112.0], [200.0, 112.0]),
         ];
         assert_eq!(join_continuations(parallel, None, 8.0).unwrap().len(), 2);
+    }
+
+    /// `paths` drawn 8 px wide on a gray image, each in its colour.
+    fn drawn(paths: &[(&Vec<[f64; 2]>, Scalar)]) -> Mat {
+        let mut image =
+            Mat::new_rows_cols_with_default(240, 400, CV_8UC3, Scalar::all(128.0)).unwrap();
+        for (path, bgr) in paths {
+            for p in path.iter() {
+                let centre = Point::new(p[0].round() as i32, p[1].round() as i32);
+                imgproc::circle(&mut image, centre, 4, *bgr, -1, imgproc::LINE_8, 0).unwrap();
+            }
+        }
+        image
+    }
+
+    #[test]
+    fn a_cable_lost_for_a_stretch_is_joined_when_straight_on_and_of_one_colour() {
+        // 80 px (10 widths) apart, in line.
+        let before = segment_px([20.0, 100.0], [120.0, 100.0]);
+        let after = segment_px([200.0, 100.0], [300.0, 100.0]);
+        // The same, turning by 0.4 rad (23°) across the gap.
+        let bent = segment_px([200.0, 100.0], [200.0 + 92.0, 100.0 + 39.0]);
+        let (blue, red) = (
+            Scalar::new(200.0, 60.0, 30.0, 0.0),
+            Scalar::new(30.0, 40.0, 210.0, 0.0),
+        );
+        for (second, bgr, pieces) in [(&after, blue, 1), (&after, red, 2), (&bent, blue, 2)] {
+            let image = drawn(&[(&before, blue), (second, bgr)]);
+            let paths = vec![before.clone(), second.clone()];
+            let found = join_continuations(paths, Some(&image), 8.0).unwrap();
+            assert_eq!(found.len(), pieces);
+        }
     }
 
     /// Two pieces 24 px apart that turn by 0.6 rad (34°) between them, and
@@ -501,18 +549,11 @@ mod tests {
             Scalar::new(30.0, 40.0, 210.0, 0.0),
         );
         for (after_bgr, pieces) in [(blue, 2), (red, 3)] {
-            let mut image =
-                Mat::new_rows_cols_with_default(240, 260, CV_8UC3, Scalar::all(128.0)).unwrap();
-            for (path, bgr) in [
+            let image = drawn(&[
                 (&before, blue),
                 (&after, after_bgr),
                 (&across, Scalar::all(20.0)),
-            ] {
-                for p in path {
-                    let centre = Point::new(p[0].round() as i32, p[1].round() as i32);
-                    imgproc::circle(&mut image, centre, 4, bgr, -1, imgproc::LINE_8, 0).unwrap();
-                }
-            }
+            ]);
             let paths = vec![before.clone(), across.clone(), after.clone()];
             let found = join_continuations(paths, Some(&image), 8.0).unwrap();
             assert_eq!(found.len(), pieces);
