@@ -963,6 +963,29 @@ fn a_straight_cable_on_a_busy_background_is_kept_and_on_wood_dropped_as_an_edge(
 }
 
 #[test]
+fn a_short_piece_on_a_busy_background_is_dropped_as_paint_and_on_wood_kept() {
+    // A 60 px arc: longer than a scrap of mask, as short as the paint
+    // scraps the network marks on paint and prints.
+    let piece = arc_px([320.0, 340.0], 100.0, -1.87, -1.27);
+    let mut found = Vec::new();
+    for background in [Background::Mosaic, Background::Wood] {
+        let (out, _) = by_known_network(background, &piece, VisionConfig::default());
+        found.push((out.background.near_fraction, out.cables.len()));
+    }
+    assert!(found[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{found:?}");
+    assert_eq!(found[0].1, 0, "{found:?}");
+    assert!(found[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{found:?}");
+    assert_eq!(found[1].1, 1, "{found:?}");
+    // The limit is a multiple of the configured one: 0 keeps everything.
+    let keep_all = VisionConfig {
+        min_cable_length_px: 0.0,
+        ..VisionConfig::default()
+    };
+    let (out, _) = by_known_network(Background::Mosaic, &piece, keep_all);
+    assert_eq!(out.cables.len(), 1);
+}
+
+#[test]
 fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
     let scene = draw_scene(

@@ -59,7 +59,8 @@ pub struct VisionArgs {
     /// at the image's own size.
     #[arg(long, default_value_t = VisionConfig::default().work_width_px)]
     pub work_width_px: u32,
-    /// Drop cables shorter than this (px): scraps of mask.
+    /// Drop cables shorter than this (px): scraps of mask; on a busy
+    /// background (paint, prints, mosaics) twice this: scraps of paint.
     #[arg(long, default_value_t = VisionConfig::default().min_cable_length_px, value_parser = length_px)]
     pub min_length_px: f64,
     /// Drop cables that run out of the image (or region of interest) and

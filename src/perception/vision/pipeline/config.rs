@@ -53,7 +53,10 @@ pub struct VisionConfig {
     /// Bound all work to this region when known (the table, the fixture):
     /// it saves time and keeps clutter outside it from becoming cables.
     pub roi_px: Option<Rect>,
-    /// Paths shorter than this are dropped: scraps of mask, not cables.
+    /// Paths shorter than this are dropped: scraps of mask, not cables. On
+    /// a busy background (see [`mask::BUSY_MAX_NEAR_FRACTION`]) the limit
+    /// is [`BUSY_MIN_LENGTH_FACTOR`] times this: scraps and splashes of
+    /// paint that the network marks come longer.
     pub min_cable_length_px: f64,
     /// Paths that run out of the region worked on and are shorter than
     /// this are dropped too: too little of such a cable is in view to
@@ -96,6 +99,11 @@ pub struct VisionConfig {
 /// The confidence below which a detection is dropped, unless a cell or
 /// the command line says otherwise (docs/vision.md, "Confidence").
 pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.45;
+
+/// How many times [`VisionConfig::min_cable_length_px`] a path must be on
+/// a busy background, where the network marks scraps and splashes of
+/// paint longer than scraps of mask (docs/vision.md, "Scraps of paint").
+pub const BUSY_MIN_LENGTH_FACTOR: f64 = 2.0;
 
 impl Default for VisionConfig {
     fn default() -> Self {

@@ -10,7 +10,7 @@ use opencv::core::{self, Mat, Rect};
 use opencv::prelude::*;
 
 use super::confidence::{self, Belief};
-use super::config::{InstanceMethod, MaskMethod};
+use super::config::{BUSY_MIN_LENGTH_FACTOR, InstanceMethod, MaskMethod};
 use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
 use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
@@ -30,6 +30,9 @@ struct LookAlikes {
     /// Edges of paper and tables, as straight as a taut cable (see
     /// [`VisionConfig::straight_edge_radius_px`]).
     edges: bool,
+    /// Scraps and splashes of paint longer than scraps of mask (see
+    /// [`VisionConfig::min_cable_length_px`]).
+    scraps: bool,
 }
 
 impl Pipeline {
@@ -81,6 +84,7 @@ impl Pipeline {
             // Paper and table edges lie on tables; on paint, prints and
             // mosaics a straight detection is a cable.
             edges: !background.busy(),
+            scraps: background.busy(),
         };
         let found = self.cables_in(&work, &mask_roi, look_alikes, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
@@ -187,6 +191,7 @@ impl Pipeline {
         let look_alikes = LookAlikes {
             strokes: false,
             edges: true,
+            scraps: false,
         };
         self.cables_in(&image, mask, look_alikes, None, full, full)
     }
@@ -208,18 +213,23 @@ impl Pipeline {
     ) -> Result<MaskInstances, VisionError> {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
+        let min_length_px = if look_alikes.scraps {
+            BUSY_MIN_LENGTH_FACTOR * self.config.min_cable_length_px
+        } else {
+            self.config.min_cable_length_px
+        };
         let found = match self.config.instances {
             // `instances_from_mask` without an image passes the mask as
             // one: crossings are then paired by shape alone.
             InstanceMethod::Skeleton => skeleton::paths_from_mask(
                 mask_roi,
                 (image_roi.channels() == 3).then_some(image_roi),
-                self.config.min_cable_length_px,
+                min_length_px,
             )?,
             InstanceMethod::Superpixels => superpixels::paths_from_mask(
                 image_roi,
                 mask_roi,
-                self.config.min_cable_length_px,
+                min_length_px,
                 self.config.superpixel_widths,
             )?,
         };
