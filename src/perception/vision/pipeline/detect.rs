@@ -27,12 +27,12 @@ struct LookAlikes {
     /// Paint strokes as long and even as cables (see
     /// [`confidence::strokes_possible`]).
     strokes: bool,
-    /// Edges of paper and tables, as straight as a taut cable (see
+    /// A busy background (paint, prints, mosaics): scraps and splashes of
+    /// paint longer than scraps of mask (see
+    /// [`VisionConfig::min_cable_length_px`]), and none of the paper and
+    /// table edges as straight as a taut cable (see
     /// [`VisionConfig::straight_edge_radius_px`]).
-    edges: bool,
-    /// Scraps and splashes of paint longer than scraps of mask (see
-    /// [`VisionConfig::min_cable_length_px`]).
-    scraps: bool,
+    busy: bool,
 }
 
 impl Pipeline {
@@ -81,10 +81,7 @@ impl Pipeline {
 
         let look_alikes = LookAlikes {
             strokes: confidence::strokes_possible(mask_used, &background),
-            // Paper and table edges lie on tables; on paint, prints and
-            // mosaics a straight detection is a cable.
-            edges: !background.busy(),
-            scraps: background.busy(),
+            busy: background.busy(),
         };
         let found = self.cables_in(&work, &mask_roi, look_alikes, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
@@ -190,8 +187,7 @@ impl Pipeline {
         };
         let look_alikes = LookAlikes {
             strokes: false,
-            edges: true,
-            scraps: false,
+            busy: false,
         };
         self.cables_in(&image, mask, look_alikes, None, full, full)
     }
@@ -213,7 +209,7 @@ impl Pipeline {
     ) -> Result<MaskInstances, VisionError> {
         let mut timings_ms = Vec::new();
         let start = Instant::now();
-        let min_length_px = if look_alikes.scraps {
+        let min_length_px = if look_alikes.busy {
             BUSY_MIN_LENGTH_FACTOR * self.config.min_cable_length_px
         } else {
             self.config.min_cable_length_px
@@ -275,7 +271,9 @@ impl Pipeline {
                 continue;
             };
             let samples_px = spline.sample(self.config.samples_per_cable);
-            if look_alikes.edges
+            // Paper and table edges lie on tables; on paint, prints and
+            // mosaics a straight detection is a cable.
+            if !look_alikes.busy
                 && looks_like_edge(
                     &samples_px,
                     path.length_px,
