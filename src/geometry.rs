@@ -36,8 +36,17 @@ impl LineInSensor {
     pub fn new(alpha_rad: f64, n_mm: f64) -> Self {
         // Subtract k half-turns to land in (-π/2, π/2]; an odd k reverses
         // the direction, and with it the normal and the offset's sign.
-        let k = ((alpha_rad - FRAC_PI_2) / PI).ceil();
-        let alpha = alpha_rad - k * PI;
+        let mut k = ((alpha_rad - FRAC_PI_2) / PI).ceil();
+        let mut alpha = alpha_rad - k * PI;
+        // The quotient rounds: an angle within an ulp or so of a half-turn
+        // boundary can land one step outside, which one more step mends.
+        if alpha > FRAC_PI_2 {
+            alpha -= PI;
+            k += 1.0;
+        } else if alpha <= -FRAC_PI_2 {
+            alpha += PI;
+            k -= 1.0;
+        }
         let n_mm = if k.rem_euclid(2.0) == 1.0 {
             -n_mm
         } else {
@@ -240,6 +249,33 @@ mod tests {
         let vertical = LineInSensor::new(-FRAC_PI_2, 1.0);
         assert_relative_eq!(vertical.alpha_rad, FRAC_PI_2, epsilon = 1e-12);
         assert_relative_eq!(vertical.n_mm, -1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn new_lands_in_the_half_turn_for_angles_an_ulp_from_its_ends() {
+        // -π/2 plus one ulp once came back as π/2 plus one ulp.
+        for m in -400..=400 {
+            let mut alpha_rad = f64::from(m) * FRAC_PI_2;
+            for _ in 0..4 {
+                alpha_rad = alpha_rad.next_down();
+            }
+            for _ in 0..8 {
+                let line = LineInSensor::new(alpha_rad, 1.0);
+                assert!(
+                    line.alpha_rad > -FRAC_PI_2 && line.alpha_rad <= FRAC_PI_2,
+                    "{alpha_rad:e} -> {line:?}"
+                );
+                let turned_by_rad = alpha_rad - line.alpha_rad;
+                let half_turns = (turned_by_rad / PI).round();
+                assert!(
+                    (turned_by_rad - half_turns * PI).abs() < 1e-12,
+                    "{alpha_rad:e}"
+                );
+                let flipped = half_turns.rem_euclid(2.0) == 1.0;
+                assert_eq!(line.n_mm, if flipped { -1.0 } else { 1.0 }, "{alpha_rad:e}");
+                alpha_rad = alpha_rad.next_up();
+            }
+        }
     }
 
     #[test]
