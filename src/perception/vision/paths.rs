@@ -149,6 +149,7 @@ pub fn join_continuations(
 ) -> Result<Vec<Vec<[f64; 2]>>, VisionError> {
     let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
     let long_gap_px = LONG_GAP_WIDTHS * width_px;
+    let reach_px = max_gap_px.max(long_gap_px);
     let span_px = tangent_span_px(width_px);
     loop {
         // Every path's two ends: (path, reversed?, end point, outward direction).
@@ -172,7 +173,7 @@ pub fn join_continuations(
                 }
                 let gap = [pb[0] - pa[0], pb[1] - pa[1]];
                 let gap_px = gap[0].hypot(gap[1]);
-                if gap_px > max_gap_px.max(long_gap_px) {
+                if gap_px > reach_px {
                     continue;
                 }
                 let onward = [-db[0], -db[1]];
