@@ -7,8 +7,9 @@ and its masks match the float ones' (models/README.md has the figures).
 Weights are quantized per output channel to 7 bits of the 8 (see
 `quantize`); activations to 8 bits, with the ranges
 (min/max) they take on the training photographs of cables-dev, at the two
-input sizes the Rust side uses. The model's inputs and outputs stay float,
-so its contract (models/README.md) is unchanged.
+input sizes the Rust side uses. The 8-bit model then takes the image's
+bytes as they are (`bytes_in`): its first layer reads them without the
+float conversion, normalisation and quantization in front of it.
 
 train_segmentation.py calls this after training; run it alone (it needs
 onnxruntime, onnx, numpy and OpenCV, not torch) to quantize the float model
@@ -33,6 +34,75 @@ CALIBRATION_IDS = range(0, 30)
 # input scale (0.375) and at 0.5, the scale it was trained at, so that
 # either scale finds its activations in range.
 CALIBRATION_SIZES = ((240, 176), (320, 240))
+
+
+def bytes_in(path: Path) -> None:
+    """Rewrites the 8-bit model at `path` to take the image's bytes (uint8,
+    NHWC) in place of float32 0..255. Between its input and the first
+    convolution's DequantizeLinear the model ran Transpose, Sub (the mean),
+    Div (the spread) and QuantizeLinear; without them that DequantizeLinear
+    reads the transposed bytes themselves, with scale 1 / spread and zero
+    point the mean rounded to a whole byte, and the convolution's bias
+    takes up the rounding. Each pixel's normalised value is then exact,
+    where the calibrated quantization rounded it to about a grey level."""
+    import onnx
+    from onnx import TensorProto, numpy_helper
+
+    model = onnx.load(path)
+    graph = model.graph
+    values = {i.name: i for i in graph.initializer}
+    array = lambda name: numpy_helper.to_array(values[name]).astype(np.float64)
+    producer = {out: node for node in graph.node for out in node.output}
+
+    def only_consumer(tensor: str, op_type: str):
+        users = [node for node in graph.node if tensor in node.input]
+        if len(users) != 1 or users[0].op_type != op_type:
+            raise ValueError(f"{path}: expected {tensor} to feed one {op_type}, found "
+                             f"{[u.op_type for u in users]}")
+        return users[0]
+
+    transpose = only_consumer(graph.input[0].name, "Transpose")
+    sub = only_consumer(transpose.output[0], "Sub")
+    div = only_consumer(sub.output[0], "Div")
+    quantize_input = only_consumer(div.output[0], "QuantizeLinear")
+    dequantize = only_consumer(quantize_input.output[0], "DequantizeLinear")
+    conv = only_consumer(dequantize.output[0], "Conv")
+    mean, spread = array(sub.input[1]), array(div.input[1])
+    if mean.min() != mean.max() or spread.min() != spread.max():
+        raise ValueError(f"{path}: the input normalisation differs between channels")
+    mean, spread = float(mean.flat[0]), float(spread.flat[0])
+    zero_point = int(round(mean))
+    # (byte - zero_point) / spread is the normalised value less `shift`.
+    shift = (zero_point - mean) / spread
+
+    weights_dq, bias_dq = producer[conv.input[1]], producer[conv.input[2]]
+    weight_scale = array(weights_dq.input[1])
+    weights = (array(weights_dq.input[0]) - array(weights_dq.input[2]).reshape(-1, 1, 1, 1)) \
+        * weight_scale.reshape(-1, 1, 1, 1)
+    bias = array(bias_dq.input[0]) * array(bias_dq.input[1]) + shift * weights.sum(axis=(1, 2, 3))
+    bias_scale = (weight_scale / spread).astype(np.float32)
+    values[bias_dq.input[0]].CopyFrom(numpy_helper.from_array(
+        np.round(bias / bias_scale).astype(np.int32), bias_dq.input[0]))
+    values[bias_dq.input[1]].CopyFrom(numpy_helper.from_array(bias_scale, bias_dq.input[1]))
+    graph.initializer.extend([
+        numpy_helper.from_array(np.array(1.0 / spread, np.float32), "bgr_scale"),
+        numpy_helper.from_array(np.array(zero_point, np.uint8), "bgr_zero_point")])
+    dequantize.input[:] = [transpose.output[0], "bgr_scale", "bgr_zero_point"]
+    for node in (sub, div, quantize_input):
+        graph.node.remove(node)
+    graph.input[0].type.tensor_type.elem_type = TensorProto.UINT8
+    gone = {sub.output[0], div.output[0], quantize_input.output[0]}
+    for info in list(graph.value_info):
+        if info.name == transpose.output[0]:
+            info.type.tensor_type.elem_type = TensorProto.UINT8
+        elif info.name in gone:
+            graph.value_info.remove(info)
+    used = {name for node in graph.node for name in node.input}
+    for value in list(graph.initializer):
+        if value.name not in used:
+            graph.initializer.remove(value)
+    onnx.checker.check_model(model)
+    onnx.save(model, path)
 
 
 def quantize(float_path: Path, out: Path, data: Path) -> None:
@@ -68,6 +138,7 @@ def quantize(float_path: Path, out: Path, data: Path) -> None:
                     activation_type=QuantType.QUInt8, weight_type=QuantType.QInt8, per_channel=True,
                     reduce_range=True)
     prepared.unlink()
+    bytes_in(out)
     print(f"quantized {float_path} to {out}: {out.stat().st_size} bytes", flush=True)
 
 

@@ -23,10 +23,10 @@ The float model is then quantized to 8-bit integers
 (quantize_segmentation.py, which also runs alone), the model the Rust side
 runs; the float one is kept beside it, as NAME_float.onnx, for comparison.
 The exported models' contract (what Rust must do) is in models/README.md:
-input `bgr`, float32, shape [1, H, W, 3] (NHWC), the image's B, G, R
-values as they are (0..255, no scaling: the model normalises inside); H and
-W multiples of 16; output `cable_probability`, float32, [1, 1, H, W], in
-[0, 1].
+input `bgr`, shape [1, H, W, 3] (NHWC), the image's B, G, R values as they
+are (no scaling: the model normalises inside), float32 0..255 for the float
+model and the bytes (uint8) for the 8-bit one; H and W multiples of 16;
+output `cable_probability`, float32, [1, 1, H, W], in [0, 1].
 
 Run (from the project's root):
     cargo run --release -- render-dataset target/render-train --count 2000 --seed 11 \
@@ -494,11 +494,16 @@ def net_size(w: int, h: int) -> tuple[int, int]:
     return max(1, round(w / 32)) * 16, max(1, round(h / 32)) * 16
 
 
+def input_type(session) -> type:
+    """What the model takes: bytes (the 8-bit model) or float32."""
+    return np.uint8 if session.get_inputs()[0].type == "tensor(uint8)" else np.float32
+
+
 def predict(session, img: np.ndarray) -> np.ndarray:
     """Probability at the image's full size, as network.rs computes it."""
     h, w = img.shape[:2]
     nw, nh = net_size(w, h)
-    small = cv2.resize(img, (nw, nh), interpolation=cv2.INTER_AREA).astype(np.float32)[None]
+    small = cv2.resize(img, (nw, nh), interpolation=cv2.INTER_AREA)[None].astype(input_type(session))
     prob = session.run(None, {"bgr": small})[0][0, 0]
     return cv2.resize(prob, (w, h), interpolation=cv2.INTER_LINEAR)
 
@@ -522,7 +527,7 @@ def evaluate(onnx_path: Path, data: Path, ids: list[int], thresholds: list[float
             dices.append(2 * inter / max(float(pred.sum() + gt.sum()), 1))
         results[t] = {"iou": float(np.mean(ious)), "dice": float(np.mean(dices)), "dice_min": float(np.min(dices))}
     # inference time of the network alone at 320x240, median of 50 runs
-    x = np.zeros((1, NET_H, NET_W, 3), np.float32)
+    x = np.zeros((1, NET_H, NET_W, 3), input_type(session))
     for _ in range(5):
         session.run(None, {"bgr": x})
     times = []

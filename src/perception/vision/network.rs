@@ -6,8 +6,9 @@
 //! 1. resize to the network's size, half the image's rounded to multiples
 //!    of 16 (320 × 240; [`SegmentationNet::input_scale`] sets the
 //!    fraction), with area averaging (`INTER_AREA`);
-//! 2. feed it as float32 `[1, h, w, 3]`, NHWC, the B, G, R values unscaled
-//!    (0..255): the model normalises inside;
+//! 2. feed it as `[1, h, w, 3]`, NHWC, the B, G, R values unscaled: the
+//!    bytes themselves to the 8-bit model, float32 0..255 to the float one
+//!    (see [`InputKind`]); the model normalises inside;
 //! 3. read the probability map `[1, 1, h, w]`, resize it bilinearly to
 //!    W × H and keep the pixels above [`SegmentationNet::threshold`] as 255.
 //!
@@ -25,7 +26,7 @@ use opencv::{core, imgproc};
 use ort::environment::Environment;
 use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
-use ort::value::TensorRef;
+use ort::value::{TensorElementType, TensorRef};
 
 use super::{MaskNetwork, VisionError};
 
@@ -174,6 +175,12 @@ pub enum NetworkError {
         #[source]
         source: ort::Error,
     },
+    /// The model's input is neither bytes nor float32 (see [`InputKind`]).
+    /// Fix: use a model made by `models/train_segmentation.py`.
+    #[error(
+        "segmentation network inference failed: model {path} takes {found}, expected uint8 or float32"
+    )]
+    ModelInput { path: PathBuf, found: String },
     /// The model does not have the one input and one output the pipeline
     /// feeds and reads. Fix: use a model made by
     /// `models/train_segmentation.py`.
@@ -250,6 +257,7 @@ impl NetworkError {
                 | NetworkError::Runtime { .. }
                 | NetworkError::ModelInvalid { .. }
                 | NetworkError::ModelShape { .. }
+                | NetworkError::ModelInput { .. }
                 | NetworkError::OutputShape { .. }
         )
     }
@@ -306,9 +314,20 @@ fn environment(library: &Path) -> Result<Environment, NetworkError> {
     Ok(env)
 }
 
+/// What a model takes as its input tensor, read from the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum InputKind {
+    /// The image's bytes: the 8-bit model, whose first layer reads them as
+    /// they are (`models/quantize_segmentation.py`).
+    Bytes,
+    /// float32 values 0..255: the float model as training exports it.
+    Floats,
+}
+
 /// The segmentation network, ready to run.
 pub struct SegmentationNet {
     session: Session,
+    input_kind: InputKind,
     /// Probability above which a pixel is cable in [`Self::mask`];
     /// [`DEFAULT_THRESHOLD`] after [`Self::load`].
     pub threshold: f32,
@@ -316,7 +335,8 @@ pub struct SegmentationNet {
     /// [`DEFAULT_INPUT_SCALE`] after [`Self::load`]. Smaller is faster and
     /// misses thin cables; the model was trained at the default.
     pub input_scale: f64,
-    /// Scratch buffers, reused between images.
+    /// Scratch buffers, reused between images (`input` for a float
+    /// model only).
     small: Mat,
     input: Vec<f32>,
 }
@@ -371,9 +391,20 @@ impl SegmentationNet {
                 outputs: session.outputs().len(),
             });
         }
-        tracing::debug!(model = %model.display(), "segmentation network loaded");
+        let input_kind = match session.inputs()[0].dtype().tensor_type() {
+            Some(TensorElementType::Uint8) => InputKind::Bytes,
+            Some(TensorElementType::Float32) => InputKind::Floats,
+            _ => {
+                return Err(NetworkError::ModelInput {
+                    path: model.to_path_buf(),
+                    found: session.inputs()[0].dtype().to_string(),
+                });
+            }
+        };
+        tracing::debug!(model = %model.display(), ?input_kind, "segmentation network loaded");
         Ok(Self {
             session,
+            input_kind,
             threshold: DEFAULT_THRESHOLD,
             input_scale: DEFAULT_INPUT_SCALE,
             small: Mat::default(),
@@ -410,19 +441,33 @@ impl SegmentationNet {
             .small
             .data_bytes()
             .map_err(cv("read the resized image"))?;
-        self.input.clear();
-        self.input.extend(bytes.iter().map(|&b| f32::from(b)));
-        let (w_us, h_us) = (w as usize, h as usize);
-        let view = ndarray::ArrayView4::from_shape((1, h_us, w_us, 3), &self.input[..])
-            .map_err(|source| NetworkError::InputTensor { source })?;
+        let shape = (1, h as usize, w as usize, 3);
+        let tensor = |source| NetworkError::InputTensor { source };
         let inference = |source: ort::Error| NetworkError::Inference { source };
-        let tensor = TensorRef::from_array_view(view).map_err(inference)?;
+        let input = match self.input_kind {
+            InputKind::Bytes => {
+                let view = ndarray::ArrayView4::from_shape(shape, bytes).map_err(tensor)?;
+                TensorRef::from_array_view(view)
+                    .map_err(inference)?
+                    .into_dyn()
+            }
+            InputKind::Floats => {
+                self.input.clear();
+                self.input.extend(bytes.iter().map(|&b| f32::from(b)));
+                let view =
+                    ndarray::ArrayView4::from_shape(shape, &self.input[..]).map_err(tensor)?;
+                TensorRef::from_array_view(view)
+                    .map_err(inference)?
+                    .into_dyn()
+            }
+        };
         let outputs = self
             .session
-            .run(ort::inputs![INPUT => tensor])
+            .run(ort::inputs![INPUT => input])
             .map_err(inference)?;
         let (shape, data) = outputs[0].try_extract_tensor::<f32>().map_err(inference)?;
-        if shape.iter().product::<i64>() != (w_us * h_us) as i64 || data.len() != w_us * h_us {
+        let pixels = (w * h) as usize;
+        if shape.iter().product::<i64>() != pixels as i64 || data.len() != pixels {
             return Err(NetworkError::OutputShape {
                 shape: shape.to_vec(),
                 width: w,
