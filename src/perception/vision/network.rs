@@ -346,6 +346,7 @@ impl std::fmt::Debug for SegmentationNet {
         f.debug_struct("SegmentationNet")
             .field("threshold", &self.threshold)
             .field("input_scale", &self.input_scale)
+            .field("input_kind", &self.input_kind)
             .finish_non_exhaustive()
     }
 }
