@@ -1,8 +1,8 @@
 //! The segmentation network end to end: the shipped model through ONNX
 //! Runtime on images made here (a drawn cable on a plain and on a textured
 //! background), its agreement with the float network it was quantized
-//! from, its errors (a missing model, a missing or invalid runtime library,
-//! a wrong image), and its accuracy on the held-out real photographs
+//! from, its errors (a missing model, a model of another input type, a
+//! missing or invalid runtime library, a wrong image), and its accuracy on the held-out real photographs
 //! of cables-dev when that folder is beside the project.
 //!
 //! The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
@@ -229,6 +229,24 @@ fn a_missing_model_is_reported() {
             assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
         }
         other => panic!("expected ModelMissing, got {other:?}"),
+    }
+}
+
+/// `tests/fixtures/int32_input.onnx` passes its int32 input through
+/// (`onnx.helper`: one Identity node, opset 17, IR version 8): a model
+/// that takes neither the image's bytes nor float32.
+#[test]
+fn a_model_that_takes_neither_bytes_nor_floats_is_reported() {
+    let model = common::root().join("tests/fixtures/int32_input.onnx");
+    match SegmentationNet::load(&model, &runtime_library()) {
+        Err(e @ NetworkError::ModelInput { .. }) => {
+            assert!(e.is_in_setup());
+            let message = e.to_string();
+            assert!(message.contains("int32_input.onnx"), "{message}");
+            assert!(message.contains("Tensor<i32>"), "{message}");
+            assert!(message.contains("expected uint8 or float32"), "{message}");
+        }
+        other => panic!("expected ModelInput, got {other:?}"),
     }
 }
 
