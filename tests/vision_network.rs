@@ -2,8 +2,9 @@
 //! Runtime on images made here (a drawn cable on a plain and on a textured
 //! background), its agreement with the float network it was quantized
 //! from, its errors (a missing model, a model of another input type, a
-//! missing or invalid runtime library, a wrong image), and its accuracy on the held-out real photographs
-//! of cables-dev when that folder is beside the project.
+//! missing or invalid runtime library, a wrong image), and its accuracy on
+//! the held-out real photographs of cables-dev when that folder is beside
+//! the project.
 //!
 //! The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
 //! `.setup/onnxruntime/libonnxruntime.so.1.31.1` (put there by

@@ -26,7 +26,7 @@ use opencv::{core, imgproc};
 use ort::environment::Environment;
 use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
-use ort::value::{TensorElementType, TensorRef};
+use ort::value::{DynValueRef, PrimitiveTensorElementType, TensorElementType, TensorRef};
 
 use super::{MaskNetwork, VisionError};
 
@@ -443,25 +443,15 @@ impl SegmentationNet {
             .data_bytes()
             .map_err(cv("read the resized image"))?;
         let shape = (1, h as usize, w as usize, 3);
-        let tensor = |source| NetworkError::InputTensor { source };
-        let inference = |source: ort::Error| NetworkError::Inference { source };
         let input = match self.input_kind {
-            InputKind::Bytes => {
-                let view = ndarray::ArrayView4::from_shape(shape, bytes).map_err(tensor)?;
-                TensorRef::from_array_view(view)
-                    .map_err(inference)?
-                    .into_dyn()
-            }
+            InputKind::Bytes => input_tensor(shape, bytes)?,
             InputKind::Floats => {
                 self.input.clear();
                 self.input.extend(bytes.iter().map(|&b| f32::from(b)));
-                let view =
-                    ndarray::ArrayView4::from_shape(shape, &self.input[..]).map_err(tensor)?;
-                TensorRef::from_array_view(view)
-                    .map_err(inference)?
-                    .into_dyn()
+                input_tensor(shape, &self.input)?
             }
         };
+        let inference = |source: ort::Error| NetworkError::Inference { source };
         let outputs = self
             .session
             .run(ort::inputs![INPUT => input])
@@ -504,6 +494,19 @@ impl SegmentationNet {
         .map_err(cv("threshold the probabilities"))?;
         Ok(mask)
     }
+}
+
+/// `data` borrowed as the model's input tensor of `shape` (NHWC), of
+/// whichever element type the model takes.
+fn input_tensor<T: PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static>(
+    shape: (usize, usize, usize, usize),
+    data: &[T],
+) -> Result<DynValueRef<'_>, NetworkError> {
+    let view = ndarray::ArrayView4::from_shape(shape, data)
+        .map_err(|source| NetworkError::InputTensor { source })?;
+    let tensor =
+        TensorRef::from_array_view(view).map_err(|source| NetworkError::Inference { source })?;
+    Ok(tensor.into_dyn())
 }
 
 /// Where the ONNX Runtime library is when nothing says otherwise: where
