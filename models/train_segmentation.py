@@ -104,17 +104,24 @@ class CableNet(nn.Module):
     ONNX Runtime at this size): an encoder of five scales (1 .. 1/16, two
     convolutions each, strided at the start of each scale), and a decoder that
     upsamples bilinearly, adds a 1x1-projected skip and convolves once per
-    scale; a 1x1 head gives one logit per pixel."""
+    scale; a 1x1 head gives one logit per pixel. With `from_half` the first
+    scale is left out (models/README.md says what that cost)."""
 
-    def __init__(self, widths: tuple[int, ...] = (16, 24, 32, 48, 64)):
+    def __init__(self, widths: tuple[int, ...] = (16, 24, 32, 48, 64), from_half: bool = False):
         super().__init__()
         w0, w1, w2, w3, w4 = widths
+        # `from_half`: the first convolution strides straight to half
+        # size and the logits are upsampled at the end.
+        self.from_half = from_half
         mean = torch.tensor(MEAN_BGR).view(1, 3, 1, 1) * 255.0
         std = torch.tensor(STD_BGR).view(1, 3, 1, 1) * 255.0
         self.register_buffer("mean", mean, persistent=False)
         self.register_buffer("std", std, persistent=False)
-        self.enc0 = nn.Sequential(ConvBnAct(3, w0), ConvBnAct(w0, w0))
-        self.enc1 = nn.Sequential(ConvBnAct(w0, w1, stride=2), ConvBnAct(w1, w1))
+        if from_half:
+            self.enc1 = nn.Sequential(ConvBnAct(3, w1, stride=2), ConvBnAct(w1, w1))
+        else:
+            self.enc0 = nn.Sequential(ConvBnAct(3, w0), ConvBnAct(w0, w0))
+            self.enc1 = nn.Sequential(ConvBnAct(w0, w1, stride=2), ConvBnAct(w1, w1))
         self.enc2 = nn.Sequential(ConvBnAct(w1, w2, stride=2), ConvBnAct(w2, w2))
         self.enc3 = nn.Sequential(ConvBnAct(w2, w3, stride=2), ConvBnAct(w3, w3))
         self.enc4 = nn.Sequential(ConvBnAct(w3, w4, stride=2), ConvBnAct(w4, w4))
@@ -124,9 +131,12 @@ class CableNet(nn.Module):
         self.dec2 = ConvBnAct(w3, w2)
         self.lat1 = nn.Conv2d(w1, w2, 1)
         self.dec1 = ConvBnAct(w2, w1)
-        self.lat0 = nn.Conv2d(w0, w1, 1)
-        self.dec0 = ConvBnAct(w1, w0)
-        self.head = nn.Conv2d(w0, 1, 1)
+        if from_half:
+            self.head = nn.Conv2d(w1, 1, 1)
+        else:
+            self.lat0 = nn.Conv2d(w0, w1, 1)
+            self.dec0 = ConvBnAct(w1, w0)
+            self.head = nn.Conv2d(w0, 1, 1)
 
     @staticmethod
     def _up(x: torch.Tensor) -> torch.Tensor:
@@ -134,14 +144,16 @@ class CableNet(nn.Module):
 
     def logits(self, x_nchw_255: torch.Tensor) -> torch.Tensor:
         x = (x_nchw_255 - self.mean) / self.std
-        s0 = self.enc0(x)
-        s1 = self.enc1(s0)
+        s0 = None if self.from_half else self.enc0(x)
+        s1 = self.enc1(x if self.from_half else s0)
         s2 = self.enc2(s1)
         s3 = self.enc3(s2)
         s4 = self.enc4(s3)
         d = self.dec3(self._up(s4) + self.lat3(s3))
         d = self.dec2(self._up(d) + self.lat2(s2))
         d = self.dec1(self._up(d) + self.lat1(s1))
+        if self.from_half:
+            return self._up(self.head(d))
         d = self.dec0(self._up(d) + self.lat0(s0))
         return self.head(d)
 
@@ -408,8 +420,17 @@ def train(args) -> CableNet:
     print(f"data: {len(real[0])} real, {len(synth[0])} synthetic, {len(busy[0]) if busy else 0} busy, "
           f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
 
-    model = CableNet()
-    if args.init is not None:
+    model = CableNet(from_half=args.from_half)
+    if args.init is not None and args.from_half:
+        # The layers both networks have start from the full network's
+        # weights; the new first convolution and head from nothing.
+        full = CableNet()
+        load_onnx_weights(full, args.init)
+        own = model.state_dict()
+        shared = {k: v for k, v in full.state_dict().items() if k in own and own[k].shape == v.shape}
+        model.load_state_dict(shared, strict=False)
+        print(f"starting from {args.init}'s weights for {len(shared)} of {len(own)} tensors", flush=True)
+    elif args.init is not None:
         load_onnx_weights(model, args.init)
         print(f"starting from {args.init}'s weights", flush=True)
     model = model.to(memory_format=torch.channels_last)
@@ -574,6 +595,9 @@ def main() -> int:
     parser.add_argument("--init", type=Path,
                         help="fine-tune this float ONNX model (e.g. models/cable_segmentation_float.onnx) "
                              "instead of training from nothing")
+    parser.add_argument("--from-half", action="store_true",
+                        help="leave out the network's first scale: the first convolution strides to half size "
+                             "and the logits are upsampled at the end (faster on CPUs without 8-bit dot products)")
     parser.add_argument("--resume", action="store_true", help="go on from the checkpoint, if there is one")
     parser.add_argument("--recolour-fraction", type=float, default=0.0,
                         help="share of rendered images whose background is given a strong hue "
