@@ -401,6 +401,15 @@ def load_onnx_weights(model: CableNet, path: Path) -> None:
                 conv.bias.copy_(b)
 
 
+def conv_count(net: Path | CableNet) -> int:
+    """The convolutions of an exported model or of a network."""
+    if isinstance(net, CableNet):
+        return sum(isinstance(m, nn.Conv2d) for m in net.modules())
+    import onnx
+
+    return sum(n.op_type == "Conv" for n in onnx.load(str(net)).graph.node)
+
+
 def freeze_batch_norms(model: CableNet) -> None:
     """Batch norms in evaluation mode: they keep the folded weights'
     statistics while the rest trains."""
@@ -421,9 +430,9 @@ def train(args) -> CableNet:
           f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
 
     model = CableNet(from_half=args.from_half)
-    if args.init is not None and args.from_half:
-        # The layers both networks have start from the full network's
-        # weights; the new first convolution and head from nothing.
+    if args.init is not None and args.from_half and conv_count(args.init) != conv_count(model):
+        # From a full network: the layers both networks have start from
+        # its weights; the new first convolution and head from nothing.
         full = CableNet()
         load_onnx_weights(full, args.init)
         own = model.state_dict()
