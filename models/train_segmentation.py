@@ -144,8 +144,11 @@ class CableNet(nn.Module):
 
     def logits(self, x_nchw_255: torch.Tensor) -> torch.Tensor:
         x = (x_nchw_255 - self.mean) / self.std
-        s0 = None if self.from_half else self.enc0(x)
-        s1 = self.enc1(x if self.from_half else s0)
+        if self.from_half:
+            s1 = self.enc1(x)
+        else:
+            s0 = self.enc0(x)
+            s1 = self.enc1(s0)
         s2 = self.enc2(s1)
         s3 = self.enc3(s2)
         s4 = self.enc4(s3)
