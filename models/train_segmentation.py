@@ -105,9 +105,13 @@ class CableNet(nn.Module):
     convolutions each, strided at the start of each scale), and a decoder that
     upsamples bilinearly, adds a 1x1-projected skip and convolves once per
     scale; a 1x1 head gives one logit per pixel. With `from_half` the first
-    scale is left out (models/README.md says what that cost)."""
+    scale is left out (models/README.md says what that cost). `deep_blocks`
+    residual blocks at the coarsest scale add capacity and context at almost
+    no cost in time; each starts as the identity, so a network fine-tuned
+    from one without them starts where it stood."""
 
-    def __init__(self, widths: tuple[int, ...] = (16, 24, 32, 48, 64), from_half: bool = False):
+    def __init__(self, widths: tuple[int, ...] = (16, 24, 32, 48, 64), from_half: bool = False,
+                 deep_blocks: int = 0):
         super().__init__()
         w0, w1, w2, w3, w4 = widths
         # `from_half`: the first convolution strides straight to half
@@ -125,6 +129,10 @@ class CableNet(nn.Module):
         self.enc2 = nn.Sequential(ConvBnAct(w1, w2, stride=2), ConvBnAct(w2, w2))
         self.enc3 = nn.Sequential(ConvBnAct(w2, w3, stride=2), ConvBnAct(w3, w3))
         self.enc4 = nn.Sequential(ConvBnAct(w3, w4, stride=2), ConvBnAct(w4, w4))
+        self.deep = nn.ModuleList(nn.Sequential(ConvBnAct(w4, w4), ConvBnAct(w4, w4, act=False))
+                                  for _ in range(deep_blocks))
+        for block in self.deep:
+            nn.init.zeros_(block[1][0].weight)
         self.lat3 = nn.Conv2d(w3, w4, 1)
         self.dec3 = ConvBnAct(w4, w3)
         self.lat2 = nn.Conv2d(w2, w3, 1)
@@ -152,6 +160,8 @@ class CableNet(nn.Module):
         s2 = self.enc2(s1)
         s3 = self.enc3(s2)
         s4 = self.enc4(s3)
+        for block in self.deep:
+            s4 = F.relu(s4 + block(s4))
         d = self.dec3(self._up(s4) + self.lat3(s3))
         d = self.dec2(self._up(d) + self.lat2(s2))
         d = self.dec1(self._up(d) + self.lat1(s1))
@@ -432,10 +442,11 @@ def train(args) -> CableNet:
     print(f"data: {len(real[0])} real, {len(synth[0])} synthetic, {len(busy[0]) if busy else 0} busy, "
           f"{len(cutouts)} real cables to paste in {time.time() - t0:.1f} s", flush=True)
 
-    model = CableNet(from_half=args.from_half)
-    if args.init is not None and args.from_half and conv_count(args.init) != conv_count(model):
-        # From a full network: the layers both networks have start from
-        # its weights; the new first convolution and head from nothing.
+    model = CableNet(from_half=args.from_half, deep_blocks=args.deep_blocks)
+    if args.init is not None and conv_count(args.init) != conv_count(model):
+        # From a full network without deep blocks: the layers both networks
+        # have start from its weights; the new ones from nothing (deep
+        # blocks as the identity).
         full = CableNet()
         load_onnx_weights(full, args.init)
         own = model.state_dict()
@@ -610,6 +621,8 @@ def main() -> int:
     parser.add_argument("--from-half", action="store_true",
                         help="leave out the network's first scale: the first convolution strides to half size "
                              "and the logits are upsampled at the end (faster on CPUs without 8-bit dot products)")
+    parser.add_argument("--deep-blocks", type=int, default=0,
+                        help="residual blocks at the coarsest scale (CableNet's deep_blocks)")
     parser.add_argument("--resume", action="store_true", help="go on from the checkpoint, if there is one")
     parser.add_argument("--recolour-fraction", type=float, default=0.0,
                         help="share of rendered images whose background is given a strong hue "
