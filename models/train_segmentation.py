@@ -444,7 +444,8 @@ def train(args) -> CableNet:
 
     model = CableNet(from_half=args.from_half, deep_blocks=args.deep_blocks)
     if args.init is not None and conv_count(args.init) != conv_count(model):
-        # From a full network without deep blocks: the layers both networks
+        # From a full network without deep blocks, into one without the
+        # full-size scale or with deep blocks: the layers both networks
         # have start from its weights; the new ones from nothing (deep
         # blocks as the identity).
         full = CableNet()
