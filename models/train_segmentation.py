@@ -666,7 +666,8 @@ def main() -> int:
                         help="leave out the network's first scale: the first convolution strides to half size "
                              "and the logits are upsampled at the end (faster on CPUs without 8-bit dot products)")
     parser.add_argument("--deep-blocks", type=int, default=0,
-                        help="residual blocks at the coarsest scale (CableNet's deep_blocks)")
+                        help="residual blocks at the coarsest scale (CableNet's deep_blocks; "
+                             "not used for the shipped model, see models/README.md)")
     parser.add_argument("--resume", action="store_true", help="go on from the checkpoint, if there is one")
     parser.add_argument("--recolour-fraction", type=float, default=0.0,
                         help="share of rendered images whose background is given a strong hue "
