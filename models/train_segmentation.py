@@ -375,22 +375,47 @@ def cl_dice(p: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return 1 - 2 * precision * sensitivity / (precision + sensitivity)
 
 
-def loss_fn(logits: torch.Tensor, target: torch.Tensor, cl_dice_weight: float = 0.0) -> torch.Tensor:
-    bce = F.binary_cross_entropy_with_logits(logits, target, pos_weight=torch.tensor(2.0))
+def crop_losses(logits: torch.Tensor, target: torch.Tensor, cl_dice_weight: float = 0.0) -> torch.Tensor:
+    """Each crop's loss: weighted cross-entropy plus soft DICE (plus clDice
+    at `cl_dice_weight`)."""
+    bce = F.binary_cross_entropy_with_logits(logits, target, pos_weight=torch.tensor(2.0),
+                                             reduction="none").mean(dim=(1, 2, 3))
     p = torch.sigmoid(logits)
     inter = (p * target).sum(dim=(1, 2, 3))
     dice = 1 - (2 * inter + 1) / (p.sum(dim=(1, 2, 3)) + target.sum(dim=(1, 2, 3)) + 1)
-    loss = bce + dice.mean()
+    loss = bce + dice
     if cl_dice_weight > 0:
-        loss = loss + cl_dice_weight * cl_dice(p, target).mean()
+        loss = loss + cl_dice_weight * cl_dice(p, target)
     return loss
 
 
-def make_batch(rng, real, synth, busy, cutouts, args):
+def loss_fn(logits: torch.Tensor, target: torch.Tensor, cl_dice_weight: float = 0.0) -> torch.Tensor:
+    return crop_losses(logits, target, cl_dice_weight).mean()
+
+
+def as_batch(crops: list[tuple[np.ndarray, np.ndarray]]) -> tuple[torch.Tensor, torch.Tensor]:
+    """Crops (image, mask) as the network's input and target tensors."""
+    x = torch.from_numpy(np.stack([c[0] for c in crops])).permute(0, 3, 1, 2).contiguous(
+        memory_format=torch.channels_last)
+    y = (torch.from_numpy(np.stack([c[1] for c in crops]))[:, None] > 0.5).float()
+    return x, y
+
+
+def hardest(model: "CableNet", candidates: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """The candidate crop the network now does worst on (its loss, without
+    a gradient): where paint looks like cable, or a cable like paint."""
+    x, y = as_batch(candidates)
+    with torch.no_grad():
+        losses = crop_losses(model.logits(x), y)
+    return candidates[int(losses.argmax())]
+
+
+def make_batch(rng, real, synth, busy, cutouts, args, model=None):
     """A batch: real photographs (`--real-fraction`), busy rendered scenes
     (`--busy-fraction`, real cables pasted over `--paste-fraction` of
-    them) and the other rendered scenes."""
-    xs, ys = [], []
+    them; each the hardest of `--hard-of` crops for `model`) and the
+    other rendered scenes."""
+    crops = []
     for _ in range(args.batch):
         u = rng.random()
         if u < args.real_fraction:
@@ -399,19 +424,17 @@ def make_batch(rng, real, synth, busy, cutouts, args):
             source = busy
         else:
             source = synth
-        j = rng.integers(0, len(source[0]))
-        img, m = source[0][j], source[1][j]
-        if source is busy and cutouts and rng.random() < args.paste_fraction:
-            img, m = paste_cables(rng, img, m, cutouts)
-        if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
-            img = recolour_background(rng, img, m)
-        img, m = augment(rng, img, m, args.crop, tuple(args.scales))
-        xs.append(img)
-        ys.append(m)
-    x = torch.from_numpy(np.stack(xs)).permute(0, 3, 1, 2).contiguous(memory_format=torch.channels_last)
-    y = torch.from_numpy(np.stack(ys))[:, None]
-    y = (y > 0.5).float()
-    return x, y
+        candidates = []
+        for _ in range(args.hard_of if source is busy and model is not None else 1):
+            j = rng.integers(0, len(source[0]))
+            img, m = source[0][j], source[1][j]
+            if source is busy and cutouts and rng.random() < args.paste_fraction:
+                img, m = paste_cables(rng, img, m, cutouts)
+            if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
+                img = recolour_background(rng, img, m)
+            candidates.append(augment(rng, img, m, args.crop, tuple(args.scales)))
+        crops.append(candidates[0] if len(candidates) == 1 else hardest(model, candidates))
+    return as_batch(crops)
 
 
 def load_onnx_weights(model: CableNet, path: Path) -> None:
@@ -522,7 +545,7 @@ def train(args) -> CableNet:
     t_train = time.time()
     running = 0.0
     for step in range(first, args.steps + 1):
-        x, y = make_batch(rng, real, synth, busy, cutouts, args)
+        x, y = make_batch(rng, real, synth, busy, cutouts, args, model if args.hard_of > 1 else None)
         loss = loss_fn(model.logits(x), y, args.cl_dice_weight)
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -675,6 +698,9 @@ def main() -> int:
     parser.add_argument("--cl-dice-weight", type=float, default=0.0,
                         help="weight of a clDice term in the loss, which keeps cables whole "
                              "(0: none; not used for the shipped model, see models/README.md)")
+    parser.add_argument("--hard-of", type=int, default=1,
+                        help="each busy crop is the hardest of this many for the network as it trains "
+                             "(models/README.md, \"Hard busy crops\"; the shipped model does not use it)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--eval-only", action="store_true", help="measure existing models")
     args = parser.parse_args()
