@@ -410,7 +410,7 @@ def hardest(model: "CableNet", candidates: list[tuple[np.ndarray, np.ndarray]]) 
     return candidates[int(losses.argmax())]
 
 
-def make_batch(rng, real, synth, busy, cutouts, args, model=None):
+def make_batch(rng, real, synth, busy, cutouts, args, model):
     """A batch: real photographs (`--real-fraction`), busy rendered scenes
     (`--busy-fraction`, real cables pasted over `--paste-fraction` of
     them; each the hardest of `--hard-of` crops for `model`) and the
@@ -425,7 +425,7 @@ def make_batch(rng, real, synth, busy, cutouts, args, model=None):
         else:
             source = synth
         candidates = []
-        for _ in range(args.hard_of if source is busy and model is not None else 1):
+        for _ in range(args.hard_of if source is busy else 1):
             j = rng.integers(0, len(source[0]))
             img, m = source[0][j], source[1][j]
             if source is busy and cutouts and rng.random() < args.paste_fraction:
@@ -545,7 +545,7 @@ def train(args) -> CableNet:
     t_train = time.time()
     running = 0.0
     for step in range(first, args.steps + 1):
-        x, y = make_batch(rng, real, synth, busy, cutouts, args, model if args.hard_of > 1 else None)
+        x, y = make_batch(rng, real, synth, busy, cutouts, args, model)
         loss = loss_fn(model.logits(x), y, args.cl_dice_weight)
         opt.zero_grad(set_to_none=True)
         loss.backward()
