@@ -80,6 +80,39 @@ fn parse_polyline(path: &Path, line_no: usize, line: &str) -> Result<Vec<[f64; 2
     Ok(coords.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
 }
 
+/// Checks that a centre line read from line `line_no` of `path` lies near
+/// the image of size `extent`: it may run out of view, but no farther
+/// than the image is wide or tall. Points far outside are a labelling
+/// error, and a line millions of pixels long would take the scoring, which
+/// walks centre lines pixel by pixel, that long.
+fn near_image(
+    path: &Path,
+    line_no: usize,
+    points: Vec<[f64; 2]>,
+    extent: Size,
+) -> Result<Vec<[f64; 2]>, VisionError> {
+    let (w, h) = (f64::from(extent.width), f64::from(extent.height));
+    match points
+        .iter()
+        .find(|[x, y]| !(-w..=2.0 * w).contains(x) || !(-h..=2.0 * h).contains(y))
+    {
+        None => Ok(points),
+        Some([x, y]) => Err(VisionError::BadAnnotation {
+            path: path.to_path_buf(),
+            line: line_no,
+            reason: format!(
+                "the point ({x:?}, {y:?}) lies farther outside the {}x{} px image than the image is wide or tall (x from {} to {}, y from {} to {})",
+                extent.width,
+                extent.height,
+                -w,
+                2.0 * w,
+                -h,
+                2.0 * h
+            ),
+        }),
+    }
+}
+
 /// Checks that the mask read from `path` is `expected` in size, which
 /// `expected_from` names.
 fn check_mask_size(
@@ -146,11 +179,15 @@ impl GroundTruth {
             path: txt.clone(),
             source,
         })?;
+        let extent = size_of(first);
         let polylines_px = text
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty())
-            .map(|(i, l)| parse_polyline(&txt, i + 1, l))
+            .map(|(i, l)| {
+                parse_polyline(&txt, i + 1, l)
+                    .and_then(|points| near_image(&txt, i + 1, points, extent))
+            })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(GroundTruth {
             masks,
@@ -217,6 +254,25 @@ mod tests {
         let err = parse_polyline(p, 2, "2 1 2 inf 4").unwrap_err();
         assert!(err.to_string().contains("`inf` is not a number"), "{err}");
         assert!(parse_polyline(p, 1, "2 1 NaN 3 4").is_err());
+    }
+
+    #[test]
+    fn centre_lines_far_outside_the_image_are_refused_with_their_line() {
+        let p = Path::new("x.txt");
+        let extent = Size::new(64, 48);
+        let near = vec![[-10.0, 0.0], [70.0, 47.0], [127.0, 95.0]];
+        assert_eq!(near_image(p, 1, near.clone(), extent).unwrap(), near);
+        let err = near_image(p, 3, vec![[1.0, 2.0], [1e9, 4.0]], extent).unwrap_err();
+        assert!(
+            matches!(err, VisionError::BadAnnotation { line: 3, .. }),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains("(1000000000.0, 4.0)")
+                && err.to_string().contains("x from -64 to 128"),
+            "{err}"
+        );
+        assert!(near_image(p, 1, vec![[0.0, -49.0]], extent).is_err());
     }
 
     #[test]
