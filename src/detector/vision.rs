@@ -14,7 +14,8 @@ use crate::perception::vision::network::LazyNetwork;
 
 /// σ of the pipeline's centre line against the true one, in pixels: on
 /// rendered scenes its grasp point lies 0.4 px from the truth in the
-/// median, 2.4 px in the mean (docs/vision.md, docs/fusion.md).
+/// median, 2.4 px in the mean (docs/vision-record.md, "The same sweep on
+/// rendered scenes"; docs/fusion.md).
 const CENTRE_LINE_SIGMA_PX: f64 = 1.0;
 
 pub struct VisionDetector {

@@ -55,15 +55,15 @@ pub const PLAIN_NEAR_LAB: f64 = 14.0;
 /// photographs (wood, cloth, prints, paper with a table's edge in view)
 /// score 0.52 to 0.84, and on the white-paper training ones that score
 /// highest (00005, 00010, 00011) the network does better than the
-/// classical mask: this keeps them 0.06 below plain. See docs/vision.md,
-/// "Which background is plain".
+/// classical mask: this keeps them 0.06 below plain. See
+/// docs/vision-record.md, "Which background is plain".
 pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 
 /// A background with less than this fraction of the (downscaled, blurred)
 /// image within [`PLAIN_NEAR_LAB`] of its median colour is busy: paint,
 /// prints, mosaics. It sits below what photographs of cables on wood,
-/// cloth and paper score (docs/vision.md, "Busy scenes: the paper's
-/// kind", gives the figures).
+/// cloth and paper score (docs/vision-record.md, "Busy scenes: the
+/// paper's kind", gives the figures).
 pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 
 /// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],
@@ -271,7 +271,7 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
 /// of `cables` (a mask of the image's size) and within `margin_px` of
 /// them are left out: thick tubes and their shading cover a third of
 /// some views of a plain cloth, and are not its background (scores in
-/// docs/vision.md, "Straight cables on a plain table").
+/// docs/vision-record.md, "Straight cables on a plain table").
 pub fn plain_locally(bgr: &Mat, cables: &Mat, margin_px: f64) -> Result<bool, VisionError> {
     let lab = plain_test_lab(bgr)?;
     let size = lab.size().map_err(cv("image size"))?;

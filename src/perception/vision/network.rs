@@ -52,7 +52,7 @@ pub const DEFAULT_BUSY_INPUT_SCALE: f64 = 0.5;
 /// [`crate::perception::vision::mask::BUSY_MAX_NEAR_FRACTION`]). There the
 /// network tells a cable from paint strokes of its colour better when it
 /// looks closer; elsewhere the smaller scale is faster and as good
-/// (docs/vision.md, "Busy scenes: the paper's kind").
+/// (docs/vision-record.md, "Busy scenes: the paper's kind").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InputScales {
     pub normal: f64,

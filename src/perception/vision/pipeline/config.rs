@@ -102,7 +102,8 @@ pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.45;
 
 /// How many times [`VisionConfig::min_cable_length_px`] a path must be on
 /// a busy background, where the network marks scraps and splashes of
-/// paint longer than scraps of mask (docs/vision.md, "Scraps of paint").
+/// paint longer than scraps of mask (docs/vision-record.md, "Scraps of
+/// paint").
 pub const BUSY_MIN_LENGTH_FACTOR: f64 = 2.0;
 
 impl Default for VisionConfig {

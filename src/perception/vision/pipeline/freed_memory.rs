@@ -7,8 +7,8 @@
 //! rises to twice the largest mmapped block freed so far (`mallopt(3)`,
 //! M_MMAP_THRESHOLD and M_TRIM_THRESHOLD). With the pipeline's buffers
 //! alone it stays below what a run frees, so every run gave its buffers
-//! back and faulted them in again, page by page (docs/vision.md, "End to
-//! end", has the count and the cost). Freeing one larger block once
+//! back and faulted them in again, page by page (docs/vision-record.md,
+//! "End to end", has the count and the cost). Freeing one larger block once
 //! raises both thresholds for the process; other allocators are not
 //! harmed by it.
 

@@ -54,7 +54,7 @@ pub(super) fn looks_like_edge(points_px: &[[f64; 2]], length_px: f64, radius_px:
 /// edges taken for cables in cables-dev's photographs (on busy
 /// backgrounds) score 1.0 and 1.25. A cable's do not: about as many
 /// rendered straight detections are kept at any share from 0.3 to 1.5
-/// (docs/vision.md, "Straight cables on a plain table").
+/// (docs/vision-record.md, "Straight cables on a plain table").
 pub(super) const EDGE_SIDES_RATIO: f64 = 0.5;
 /// Where each side's background is read, in cable widths from the
 /// detection's centre line: clear of the cable and its shading.
