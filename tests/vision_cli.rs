@@ -1,6 +1,6 @@
 //! `cablecell detect` and `cablecell eval-vision` on images the test
-//! draws itself (plain backgrounds, so the classical mask applies and no
-//! network is needed).
+//! draws itself: plain backgrounds, where `--mask auto` takes the
+//! classical mask and no network is needed.
 
 use std::path::{Path, PathBuf};
 
@@ -56,6 +56,8 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     let reports = json_of(&[
         "detect",
         text(&image),
+        "--mask",
+        "auto",
         "--json",
         "--masks",
         text(&masks),
@@ -93,7 +95,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     assert!(overlay.join("one.png").is_file());
 
     // Without `--masks` no cable's mask is drawn.
-    let reports = &json_of(&["detect", text(&image), "--json"])["images"];
+    let reports = &json_of(&["detect", text(&image), "--mask", "auto", "--json"])["images"];
     assert_eq!(reports[0]["cables"].as_array().map(Vec::len), Some(1));
     assert_eq!(stages(&reports[0]).len(), 4, "{:?}", stages(&reports[0]));
     assert!(!stages(&reports[0]).contains(&"instance_masks".to_owned()));
@@ -101,7 +103,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
 
     // Read by a person: the one-off start-up first, then the image's
     // warmed-up times.
-    let human = cablecell(&["detect", text(&image)]);
+    let human = cablecell(&["detect", text(&image), "--mask", "auto"]);
     let printed = String::from_utf8_lossy(&human.stdout);
     let lines: Vec<&str> = printed.lines().collect();
     assert!(lines[0].starts_with("start-up: "), "{printed}");
@@ -335,7 +337,7 @@ fn detect_finds_the_network_from_any_working_directory() {
         false,
     );
     let out = common::command()
-        .args(["detect", "elsewhere.jpg", "--mask", "network", "--json"])
+        .args(["detect", "elsewhere.jpg", "--json"])
         .args(["--straight-edge-radius-px", "0"])
         .current_dir(dir.path())
         .env_remove("ORT_DYLIB_PATH")
@@ -404,7 +406,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         ],
         true,
     );
-    let e = json_of(&["eval-vision", text(dir.path()), "--json"]);
+    let e = json_of(&["eval-vision", text(dir.path()), "--mask", "auto", "--json"]);
     common::assert_follows_schema("eval-vision", &e);
     assert_eq!(e["images"], 2);
     assert!(e["union_dice"]["mean"].as_f64().expect("dice") > 0.8, "{e}");
@@ -414,7 +416,8 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{e}"
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
-    // Dark cables on a plain table: the classical mask, clean, on both.
+    // Dark cables on a plain table: `auto` takes the classical mask,
+    // clean, on both.
     assert_eq!(
         e["mask_used"],
         serde_json::json!({"classical": 2, "network": 0, "labelled": 0}),
@@ -433,7 +436,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         labels["union_dice"]["mean"].as_f64().expect("dice") > 0.9,
         "{e}"
     );
-    let human = cablecell(&["eval-vision", text(dir.path())]);
+    let human = cablecell(&["eval-vision", text(dir.path()), "--mask", "auto"]);
     let printed = String::from_utf8_lossy(&human.stdout);
     assert!(printed.contains("instance count right"), "{printed}");
     assert!(printed.contains("labels' own union DICE"), "{printed}");
@@ -447,7 +450,7 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         vec![cable([-20.0, 240.0], [60.0, 240.0])],
         true,
     );
-    let human = cablecell(&["eval-vision", text(dir.path())]);
+    let human = cablecell(&["eval-vision", text(dir.path()), "--mask", "auto"]);
     let printed = String::from_utf8_lossy(&human.stdout);
     assert!(
         printed.contains("count wrong in         00002 (0 found, 1 labelled)"),
@@ -460,16 +463,23 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
 }
 
 /// Scores, as DIR/00000, an image of the `shown` cables against labels
-/// of the `labelled` ones, keeping straight cables: the `eval-vision`
-/// arguments and its JSON report.
+/// of the `labelled` ones, with `auto`'s classical mask, keeping straight
+/// cables: the `eval-vision` arguments and its JSON report.
 fn eval_labels_over(
     dir: &Path,
     labelled: Vec<CableSpec>,
     shown: Vec<CableSpec>,
-) -> ([&str; 4], serde_json::Value) {
+) -> ([&str; 6], serde_json::Value) {
     write_scene(dir, "00000", labelled, true);
     write_scene(dir, "00000", shown, false);
-    let args = ["eval-vision", text(dir), "--straight-edge-radius-px", "0"];
+    let args = [
+        "eval-vision",
+        text(dir),
+        "--mask",
+        "auto",
+        "--straight-edge-radius-px",
+        "0",
+    ];
     let e = json_of(&[&args[..], &["--json"]].concat());
     (args, e)
 }

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use cablecell::campaign::bench::cell::ShapeColumns;
 use cablecell::campaign::bench::vision::{
-    ImageSet, SkipSaving, VisionBenchError, VisionRow, photographs, rendered_set, run_vision,
-    skip_saving, skip_settings, vision_settings,
+    DEFAULT_SETTING, ImageSet, SkipSaving, VisionBenchError, VisionRow, photographs, rendered_set,
+    run_vision, skip_saving, skip_settings, vision_settings,
 };
 use cablecell::campaign::bench::{
     BenchSize, SettingRow, StageLatency, run_settings, settings, stage_latencies,
@@ -103,23 +103,24 @@ pub fn bench(quick: bool, json: bool, plot: Option<&Path>, photos: Option<&Path>
     // The default pipeline's stages, on the rendered images.
     if let Some(default) = vision
         .iter()
-        .find(|row| row.images == RENDERED && row.setting.starts_with("auto"))
+        .find(|row| row.images == RENDERED && row.setting.starts_with(DEFAULT_SETTING))
     {
         stages.extend(default.stages.iter().map(|stage| StageLatency {
-            stage: format!("vision (auto): {}", stage.stage),
+            stage: format!("vision (default): {}", stage.stage),
             ..stage.clone()
         }));
     }
     // The plain set's rows are `skip_settings`' in order: auto, the
-    // network forced, auto on a region of interest.
+    // network on every image (the default), the default on a region of
+    // interest.
     let plain: Vec<&VisionRow> = vision
         .iter()
         .filter(|row| row.images == RENDERED_PLAIN)
         .collect();
     let skip_savings = match plain[..] {
-        [auto, forced, roi] => [
-            skip_saving("network", auto, forced),
-            skip_saving("image_outside_roi", roi, auto),
+        [auto, default, roi] => [
+            skip_saving("network", auto, default),
+            skip_saving("image_outside_roi", roi, default),
         ]
         .into_iter()
         .flatten()

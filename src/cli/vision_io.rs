@@ -21,10 +21,11 @@ use opencv::{imgcodecs, imgproc};
 
 #[derive(Args, Debug, Clone)]
 pub struct VisionArgs {
-    /// How to find the cables' pixels: `auto` uses the classical mask on a
-    /// plain background unless that mask is in doubt (the notes say why),
-    /// and the network otherwise.
-    #[arg(long, value_enum, default_value = "auto")]
+    /// How to find the cables' pixels: the network; the classical mask;
+    /// or `auto`: the classical mask on a plain background unless that
+    /// mask is in doubt (the notes say why), the network otherwise, which
+    /// saves the network's time there at some accuracy (docs/vision.md).
+    #[arg(long, value_enum, default_value = "network")]
     pub mask: MaskArg,
     /// How to split the mask into cables.
     #[arg(long, value_enum, default_value = "skeleton")]

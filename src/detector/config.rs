@@ -72,9 +72,9 @@ fn scale_in_range<E: serde::de::Error>(field: &str, scale: f64) -> Result<f64, E
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VisionDetectorConfig {
-    /// `auto` (classical on a plain background unless that mask is in
-    /// doubt, else the network),
-    /// `classical` or `network`.
+    /// `network`; `classical`; or `auto`: the classical mask on a plain
+    /// background unless that mask is in doubt, else the network (faster
+    /// there, less accurate).
     pub mask: MaskMethod,
     /// `skeleton` or `superpixels` (the paper's).
     pub instances: InstanceMethod,

@@ -40,6 +40,9 @@ pub enum InstanceMethod {
 /// of the image as worked on, [`Self::work_width_px`] wide.
 #[derive(Clone, Debug)]
 pub struct VisionConfig {
+    /// `Auto` by default, which runs without a network too; the commands
+    /// and the shipped cell files take `Network`, the more accurate on
+    /// plain backgrounds as well (docs/vision.md, "The pipeline").
     pub mask: MaskMethod,
     pub instances: InstanceMethod,
     /// Images are worked on at this width, a wider one shrunk and a
