@@ -713,6 +713,45 @@ fn a_short_cable_running_out_of_view_is_dropped_a_short_loose_one_kept() {
 }
 
 #[test]
+fn a_border_piece_is_measured_by_its_cable_where_only_cables_are_in_the_mask() {
+    // A cable 8 px across, its rounded end 90 px into view: its skeleton
+    // stops about half a width short of that end, under the 90 px border
+    // length.
+    let piece = segment_px([0.0, 200.0], [86.0, 211.0]);
+    let border = |out: &VisionOutput| {
+        out.notes
+            .iter()
+            .any(|n| n.contains("run out of view shorter than 90 px"))
+    };
+    // A plain table's classical mask, and a labelled one, hold cables
+    // alone: the cable's length in view is weighed.
+    let plain = on_gray_table(vec![cable(piece.clone(), [20; 3])]);
+    let out = detect(&plain.bgr, keep_straight());
+    assert_eq!(out.mask_used, MaskMethod::Classical);
+    assert_each_followed(&out, std::slice::from_ref(&piece), 2.5);
+    let labelled = Pipeline::new(keep_straight())
+        .instances_from_mask(&plain.union_mask, Some(&plain.bgr))
+        .unwrap();
+    assert_eq!(labelled.cables.len(), 1);
+    // On paint and prints the skeleton's own length is weighed: its
+    // shortfall keeps short scraps of paint at the border out.
+    let (out, _) = by_known_network(Background::Mosaic, &piece, keep_straight());
+    assert!(out.cables.is_empty() && border(&out), "{:?}", out.notes);
+    // The piece is long enough for a cable there, but for the border.
+    let keep_border = VisionConfig {
+        min_border_cable_length_px: 0.0,
+        ..keep_straight()
+    };
+    let (out, _) = by_known_network(Background::Mosaic, &piece, keep_border);
+    assert_eq!(out.cables.len(), 1, "{:?}", out.notes);
+    assert!(
+        out.cables[0].length_px < 90.0,
+        "{}",
+        out.cables[0].length_px
+    );
+}
+
+#[test]
 fn a_band_along_the_border_is_not_taken_for_cable() {
     // Two cables converge on the right border at about 20° and reach
     // it about 50 px apart; a dark band along the border (a shadow at

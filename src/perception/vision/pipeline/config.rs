@@ -66,6 +66,10 @@ pub struct VisionConfig {
     /// grasp it, and the middle of what is seen is not the cable's middle.
     /// The network marks a cable's bare metal end as cable, so the length
     /// takes in a ferrule of up to 10 px beside 80 px of insulation.
+    /// Where the mask holds nothing but cables (no busy background, and no
+    /// network mask on a background with paint), the skeleton's length
+    /// plus the image's cable width is measured: the cable's length in
+    /// view.
     pub min_border_cable_length_px: f64,
     /// Paths straighter than an arc of this radius (px), and within 3 px
     /// of straight, are dropped, as are paths within 1.5 px of straight
