@@ -752,6 +752,42 @@ fn a_border_piece_is_measured_by_its_cable_where_only_cables_are_in_the_mask() {
 }
 
 #[test]
+fn a_thick_cable_is_long_by_its_length_in_view_where_only_cables_are_in_the_mask() {
+    // A tube 16 px across and 110 px long, lying loose: a skeleton about
+    // a width shorter than the tube, under the ten widths a cable's
+    // confidence asks for.
+    let tube = vec![matte_cable(
+        segment_px([200.0, 240.0], [310.0, 250.0]),
+        16.0,
+        [40, 40, 220],
+    )];
+    let scene = |background| draw_scene(480, 640, background, 0.0, tube.clone(), 7).unwrap();
+    let plain = scene(Background::Plain { bgr: [210; 3] });
+    let labelled = Pipeline::new(keep_straight())
+        .instances_from_mask(&plain.union_mask, Some(&plain.bgr))
+        .unwrap();
+    // The same mask, as a network would mark it on a mosaic, where paint
+    // may pass for cable: the skeleton's own length is weighed.
+    let mosaic = scene(Background::Mosaic);
+    let mut net = KnownMask::new(plain.union_mask.clone());
+    let on_paint = Pipeline::new(keep_straight())
+        .detect(&mosaic.bgr, Some(&mut net))
+        .unwrap();
+    assert_eq!((labelled.cables.len(), on_paint.cables.len()), (1, 1));
+    let (cable, on_paint) = (&labelled.cables[0], &on_paint.cables[0]);
+    // On paint the tube's width is also weighed against the image's
+    // typical width, a factor of 1 at most.
+    let ratio = cable.confidence / on_paint.confidence;
+    let expected = (cable.length_px + labelled.cable_width_px) / cable.length_px;
+    assert!(
+        ratio > 0.99 * expected,
+        "{} / {} against {expected}",
+        cable.confidence,
+        on_paint.confidence
+    );
+}
+
+#[test]
 fn a_band_along_the_border_is_not_taken_for_cable() {
     // Two cables converge on the right border at about 20° and reach
     // it about 50 px apart; a dark band along the border (a shadow at

@@ -242,21 +242,22 @@ impl Pipeline {
         // leaves the region.
         let margin_px = found.width_px + 2.0;
         let at_border = |p: &[f64; 2]| paths::near_border(*p, size_px, margin_px);
-        // Where the mask holds nothing but cables, a border piece's length
-        // is its cable's in view: the skeleton and the half width it stops
-        // short of the cable's end at each end. Where paint may pass for
-        // cable, that shortfall stays as a margin against scraps.
+        // Where the mask holds nothing but cables, a path's length is its
+        // cable's in view: the skeleton and the half width it stops short
+        // of the cable's end at each end. Where paint may pass for cable,
+        // that shortfall stays as a margin against scraps.
         let in_view_extra_px = if look_alikes.none() {
             found.width_px
         } else {
             0.0
         };
+        let cable_length_px = |path: &paths::CablePath| path.length_px + in_view_extra_px;
         let paths: Vec<_> = found
             .paths
             .iter()
             .filter(|path| {
                 let ends = [path.points_px.first(), path.points_px.last()];
-                path.length_px + in_view_extra_px >= self.config.min_border_cable_length_px
+                cable_length_px(path) >= self.config.min_border_cable_length_px
                     || !ends.into_iter().flatten().any(at_border)
             })
             .collect();
@@ -276,7 +277,7 @@ impl Pipeline {
                 &half_widths,
                 belief,
                 &path.points_px,
-                path.length_px,
+                cable_length_px(path),
                 look_alikes.strokes.then_some(found.width_px),
             );
             if confidence < self.config.min_confidence {
