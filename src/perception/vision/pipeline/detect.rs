@@ -38,7 +38,7 @@ struct LookAlikes {
 impl LookAlikes {
     /// Whether the mask holds nothing but cables: neither strokes nor a
     /// busy background's scraps.
-    fn none(self) -> bool {
+    fn only_cables(self) -> bool {
         !self.strokes && !self.busy
     }
 }
@@ -246,7 +246,7 @@ impl Pipeline {
         // cable's in view: the skeleton and the half width it stops short
         // of the cable's end at each end. Where paint may pass for cable,
         // that shortfall stays as a margin against scraps.
-        let in_view_extra_px = if look_alikes.none() {
+        let in_view_extra_px = if look_alikes.only_cables() {
             found.width_px
         } else {
             0.0
