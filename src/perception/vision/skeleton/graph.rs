@@ -15,8 +15,9 @@ const MERGE_WIDTHS: f64 = 2.5;
 /// Junctions up to this many cable widths apart may still be one crossing
 /// (two cables crossing at 10° overlap for about six widths; 10 px cables
 /// bending opposite ways through 29° left junctions 8.6 widths apart), when
-/// their shape says so (see `Graph::merge_junctions`).
-const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
+/// their shape says so (see `Graph::merge_junctions`) or their pairing
+/// does (see `pairing::merge_cheaper_crossings`).
+pub(super) const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
 
 /// How straight both outer branches of a split crossing's junction must run
 /// on into the edge between the junctions. That edge runs between the two
@@ -347,6 +348,19 @@ impl Graph {
             .collect()
     }
 
+    /// Makes the run `e` between two junctions part of one crossing: the
+    /// merged junctions at its ends become one (`root` gives each node's).
+    pub(super) fn merge_across(&mut self, e: usize, root: &mut [usize]) {
+        let [a, b] = self.edges[e].ends;
+        let (ra, rb) = (root[a], root[b]);
+        for r in root.iter_mut() {
+            if *r == ra {
+                *r = rb;
+            }
+        }
+        self.edges[e].internal = true;
+    }
+
     /// Pixels of a branch going out of its junction.
     pub(super) fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
         let px = &self.edges[e].pixels;
@@ -374,7 +388,7 @@ mod tests {
     use opencv::core::{Point, Scalar};
     use opencv::imgproc;
 
-    use super::super::pairing::junction_branches;
+    use super::super::pairing::{junction_branches, merge_cheaper_crossings, pair_branches};
     use super::super::thin::skeleton;
     use super::*;
     use crate::perception::vision::mask::zeros_u8;
@@ -420,5 +434,46 @@ mod tests {
         let branches = junction_branches(&graph, &root);
         let counts: Vec<usize> = branches.values().map(Vec::len).collect();
         assert_eq!(counts, vec![2], "{counts:?}");
+    }
+
+    #[test]
+    fn junctions_that_pair_more_cheaply_as_one_crossing_are_merged() {
+        // Two cables 6 px wide run together for 40 px and part again; one
+        // comes in steeply, 1.1 rad off the run they share, so the shapes
+        // `merge_junctions` looks for keep the two junctions apart, and
+        // each, paired alone, ends a cable.
+        let mut graph = graph_of(&[
+            [[60, 40], [80, 80]],
+            [[40, 110], [80, 80]],
+            [[80, 80], [120, 80]],
+            [[120, 80], [160, 110]],
+            [[120, 80], [160, 50]],
+        ]);
+        let width_px = 6.0;
+        let root = graph.merge_junctions(width_px);
+        let counts = |graph: &Graph, root: &[usize]| -> Vec<usize> {
+            junction_branches(graph, root)
+                .values()
+                .map(Vec::len)
+                .collect()
+        };
+        assert_eq!(counts(&graph, &root), vec![3, 3]);
+        let root = merge_cheaper_crossings(&mut graph, root, width_px);
+        assert_eq!(counts(&graph, &root), vec![4]);
+        // Each cable goes on through the crossing.
+        let partner = pair_branches(&graph, &root, None, width_px).unwrap();
+        let far_end = |branch: Branch| *graph.outward(branch).last().unwrap();
+        let near = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) < 4.0;
+        for (from, to) in [
+            ([60.0, 40.0], [160.0, 110.0]),
+            ([40.0, 110.0], [160.0, 50.0]),
+        ] {
+            let branch = partner.keys().find(|&&b| near(far_end(b), from)).unwrap();
+            assert!(
+                near(far_end(partner[branch]), to),
+                "{:?}",
+                far_end(partner[branch])
+            );
+        }
     }
 }

@@ -8,7 +8,9 @@
 //! between them edges. Short spurs (thinning artefacts at blunt ends and
 //! ragged edges) are pruned; junctions joined by an edge shorter than a few
 //! cable widths are merged, because two cables crossing at a shallow angle
-//! thin into two 3-way junctions rather than one 4-way one. At each
+//! thin into two 3-way junctions rather than one 4-way one; so are two
+//! 3-way junctions further apart whose other branches pair far more
+//! cheaply as one crossing than as two junctions. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least, each branch's direction followed back along its curve into the
 //! junction, and, given the image, pairing branches of unlike colour costs
@@ -24,7 +26,8 @@
 //! - `graph.rs`: the skeleton's graph, its spurs pruned and its crossings'
 //!   junctions merged;
 //! - `direction.rs`: a branch's direction at its junction;
-//! - `pairing.rs`: a junction's branches paired;
+//! - `pairing.rs`: junctions merged where one crossing pairs their branches
+//!   more cheaply, and each junction's branches paired;
 //! - `walk.rs`: the paths walked through the pairings, and cut at corners.
 
 mod direction;
@@ -67,6 +70,7 @@ pub fn paths_from_mask(
     graph.prune_spurs(spur_px, &graph.unmerged());
     let root = graph.merge_junctions(width_px);
     graph.prune_spurs(spur_px, &root);
+    let root = pairing::merge_cheaper_crossings(&mut graph, root, width_px);
     // Branches per merged junction, and their least-cost pairing (bending,
     // and colour when the image is given).
     let junctions = pairing::junction_branches(&graph, &root).len();

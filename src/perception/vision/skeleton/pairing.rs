@@ -1,14 +1,15 @@
 //! Pairing a junction's branches: a cable goes on through a crossing as
 //! it bends and keeps its colour, so the branches are paired at least
 //! total cost of bending and colour difference; a loop's two ends are not
-//! paired with each other.
+//! paired with each other. Two junctions whose branches pair far more
+//! cheaply as one crossing than apart are first merged into one.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use opencv::core::Mat;
 
 use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
-use super::graph::{Branch, Graph, NodeKind};
+use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS};
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::paths::{delta_e, median_colour_lab};
 
@@ -56,6 +57,81 @@ pub(super) fn junction_branches(graph: &Graph, root: &[usize]) -> HashMap<usize,
         }
     }
     branches
+}
+
+/// Merges two 3-way junctions that one run of skeleton, shorter than
+/// [`SPLIT_CROSSING_WIDTHS`], joins into one crossing where pairing their
+/// four other branches there costs, by bending, at least
+/// [`UNPAIRED_COST_RAD`] less than pairing each junction's three alone:
+/// two cables crossing at a shallow angle, one of them bending through
+/// the crossing, leave two junctions that the shapes `Graph::
+/// merge_junctions` looks for keep apart, and each junction, paired
+/// alone, ends a cable there. Asking for that much less merges only
+/// where the crossing goes on with a cable the two junctions would end;
+/// the runs that save most are merged first, each junction once.
+/// Returns each node's merged junction, as `root` gives it.
+pub(super) fn merge_cheaper_crossings(
+    graph: &mut Graph,
+    mut root: Vec<usize>,
+    width_px: f64,
+) -> Vec<usize> {
+    let branches = junction_branches(graph, &root);
+    let least_cost = |list: &[Branch], centre: [f64; 2]| {
+        let outward: Vec<_> = list.iter().map(|&b| graph.outward(b)).collect();
+        let mut cost = bend_costs(&outward, centre, width_px);
+        forbid_closing_loops(&mut cost, list);
+        pairing_cost(&cost, &best_pairing(&cost))
+    };
+    let mut savings: Vec<(f64, usize)> = Vec::new();
+    for (e, edge) in graph.edges.iter().enumerate() {
+        let (ra, rb) = (root[edge.ends[0]], root[edge.ends[1]]);
+        if !edge.alive
+            || edge.internal
+            || edge.length_px >= SPLIT_CROSSING_WIDTHS * width_px
+            || ra == rb
+        {
+            continue;
+        }
+        let (Some(at_a), Some(at_b)) = (branches.get(&ra), branches.get(&rb)) else {
+            continue;
+        };
+        let runs_between = at_a.iter().filter(|x| at_b.iter().any(|y| y.0 == x.0));
+        if at_a.len() != 3 || at_b.len() != 3 || runs_between.count() != 1 {
+            continue;
+        }
+        let outer: Vec<Branch> = at_a
+            .iter()
+            .chain(at_b)
+            .filter(|b| b.0 != e)
+            .copied()
+            .collect();
+        // The merged junction is centred where `rb` is (see
+        // `Graph::merge_across`), and paired there.
+        let centre = graph.nodes[rb].centre_px;
+        let apart = least_cost(at_a, graph.nodes[ra].centre_px) + least_cost(at_b, centre);
+        let saving = apart - least_cost(&outer, centre);
+        if saving >= UNPAIRED_COST_RAD {
+            savings.push((saving, e));
+        }
+    }
+    savings.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let mut merged = HashSet::new();
+    for (_, e) in savings {
+        let (ra, rb) = (root[graph.edges[e].ends[0]], root[graph.edges[e].ends[1]]);
+        if merged.contains(&ra) || merged.contains(&rb) {
+            continue;
+        }
+        merged.extend([ra, rb]);
+        graph.merge_across(e, &mut root);
+    }
+    root
+}
+
+/// What the pairing `pairs` of branches whose pairings cost `cost` costs,
+/// each branch it leaves unpaired [`UNPAIRED_COST_RAD`].
+fn pairing_cost(cost: &[Vec<f64>], pairs: &[(usize, usize)]) -> f64 {
+    let paired: f64 = pairs.iter().map(|&(i, j)| cost[i][j]).sum();
+    paired + UNPAIRED_COST_RAD * (cost.len() - 2 * pairs.len()) as f64
 }
 
 /// Each junction branch's partner: at every merged junction (`root`
