@@ -405,6 +405,14 @@ mod tests {
         Graph::build(thinned.grid, &thinned.pixels)
     }
 
+    /// How many branches meet at each merged junction.
+    fn branch_counts(graph: &Graph, root: &[usize]) -> Vec<usize> {
+        junction_branches(graph, root)
+            .values()
+            .map(Vec::len)
+            .collect()
+    }
+
     #[test]
     fn a_spur_at_a_crossings_second_junction_goes_once_they_are_merged() {
         // A cable down x = 50, a side run of 8 px at y = 60 that forks into
@@ -431,9 +439,7 @@ mod tests {
         graph.prune_spurs(spur_px, &root);
         assert_eq!(spurs_alive(&graph), 0);
         // The merged junction is left with the cable's two branches.
-        let branches = junction_branches(&graph, &root);
-        let counts: Vec<usize> = branches.values().map(Vec::len).collect();
-        assert_eq!(counts, vec![2], "{counts:?}");
+        assert_eq!(branch_counts(&graph, &root), vec![2]);
     }
 
     #[test]
@@ -451,15 +457,9 @@ mod tests {
         ]);
         let width_px = 6.0;
         let root = graph.merge_junctions(width_px);
-        let counts = |graph: &Graph, root: &[usize]| -> Vec<usize> {
-            junction_branches(graph, root)
-                .values()
-                .map(Vec::len)
-                .collect()
-        };
-        assert_eq!(counts(&graph, &root), vec![3, 3]);
+        assert_eq!(branch_counts(&graph, &root), vec![3, 3]);
         let root = merge_cheaper_crossings(&mut graph, root, width_px);
-        assert_eq!(counts(&graph, &root), vec![4]);
+        assert_eq!(branch_counts(&graph, &root), vec![4]);
         // Each cable goes on through the crossing.
         let partner = pair_branches(&graph, &root, None, width_px).unwrap();
         let far_end = |branch: Branch| *graph.outward(branch).last().unwrap();
