@@ -85,11 +85,8 @@ pub(super) fn merge_cheaper_crossings(
     let mut savings: Vec<(f64, usize)> = Vec::new();
     for (e, edge) in graph.edges.iter().enumerate() {
         let (ra, rb) = (root[edge.ends[0]], root[edge.ends[1]]);
-        if !edge.alive
-            || edge.internal
-            || edge.length_px >= SPLIT_CROSSING_WIDTHS * width_px
-            || ra == rb
-        {
+        // A run inside a merged junction has both ends at its root.
+        if !edge.alive || ra == rb || edge.length_px >= SPLIT_CROSSING_WIDTHS * width_px {
             continue;
         }
         let (Some(at_a), Some(at_b)) = (branches.get(&ra), branches.get(&rb)) else {
