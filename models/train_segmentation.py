@@ -303,7 +303,11 @@ def augment(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray, crop: i
         img, mask = img[::-1], mask[::-1]
     s = rng.uniform(*scales) if rng.random() < 0.7 else 1.0
     a = rng.uniform(-180, 180) if rng.random() < 0.5 else rng.uniform(-15, 15)
-    cx, cy = rng.uniform(crop / 2 / s, w - crop / 2 / s), rng.uniform(crop / 2 / s, h - crop / 2 / s)
+    # The crop's centre keeps it inside the image; where the crop is the
+    # larger (`--crop` over a scaled-down image), it keeps the image inside
+    # the crop, and reflection fills the rest.
+    half = crop / 2 / s
+    cx, cy = (rng.uniform(min(half, side - half), max(half, side - half)) for side in (w, h))
     mtx = cv2.getRotationMatrix2D((cx, cy), a, s)
     mtx[:, 2] += (crop / 2 - cx, crop / 2 - cy)
     img = cv2.warpAffine(np.ascontiguousarray(img), mtx, (crop, crop), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
