@@ -260,6 +260,7 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
     let cell = common::sim_cell_with_oracle_file(dir.path());
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
+    let report_path = dir.path().join("report.json");
     let child = common::command()
         .args([
             "run",
@@ -270,11 +271,11 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
             "--json",
         ])
         .args(["--cell", cell.to_str().unwrap(), "--live", &addr])
-        .stdout(Stdio::null())
+        .stdout(std::fs::File::create(&report_path).unwrap())
         .stderr(Stdio::null())
         .spawn()
         .expect("cablecell starts");
-    let _child = Killed(child);
+    let mut child = Killed(child);
 
     // The server is up once the port answers (generous: a cold start).
     let deadline = Instant::now() + Duration::from_secs(60);
@@ -302,28 +303,23 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
         "foxglove.sdk.v1"
     );
 
-    // Channels are advertised as their first message goes out: subscribe
-    // to each wanted one as it appears, until a frame and a transition
-    // have come.
+    // Every channel is advertised as the viewer connects: subscribe to
+    // the wanted ones as they appear, and read until the run ends and the
+    // server closes.
     let wanted = ["/tactile/dv", "/state"];
     let mut subscriptions: BTreeMap<u32, String> = BTreeMap::new();
     let mut advertised = Vec::new();
-    let mut received: BTreeMap<String, Value> = BTreeMap::new();
-    while received.len() < wanted.len() {
+    let mut received: BTreeMap<String, Vec<Value>> = BTreeMap::new();
+    loop {
         let message = match socket.read() {
             Ok(message) => message,
             Err(tungstenite::Error::Io(e))
                 if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::TimedOut =>
             {
-                panic!(
-                    "nothing for 30 s; advertised {advertised:?}, received {:?}",
-                    received.keys()
-                )
+                panic!("nothing for 30 s; advertised {advertised:?}, received {received:?}")
             }
-            Err(error) => panic!(
-                "the server went away ({error}); advertised {advertised:?}, received {:?}",
-                received.keys()
-            ),
+            // The run ended and the server went away.
+            Err(_) => break,
         };
         match message {
             tungstenite::Message::Text(text) => {
@@ -367,17 +363,45 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
                     "a wall-clock time"
                 );
                 let payload: Value = serde_json::from_slice(&bytes[13..]).unwrap();
-                received.insert(subscriptions[&id].clone(), payload);
+                received
+                    .entry(subscriptions[&id].clone())
+                    .or_default()
+                    .push(payload);
             }
             _ => {}
         }
     }
-    assert_eq!(
-        received["/tactile/dv"]["dv_v"].as_array().unwrap().len(),
-        25
+    let mut every_topic: Vec<&str> = cablecell::recording::Topic::ALL
+        .iter()
+        .map(|t| t.name())
+        .collect();
+    every_topic.sort();
+    advertised.sort();
+    assert_eq!(advertised, every_topic);
+    assert!(child.0.wait().unwrap().success());
+
+    // The viewer connected while the run prepared: it saw the trial
+    // grasp's tactile frames (read in `evaluate`, the channel's first
+    // messages) and every transition from then on, the last one too.
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
+    let transitions: Vec<&Value> = report["transitions"].as_array().unwrap().iter().collect();
+    let states = &received["/state"];
+    assert!(!states.is_empty());
+    let seen: Vec<[&Value; 2]> = states.iter().map(|s| [&s["from"], &s["to"]]).collect();
+    let sent: Vec<[&Value; 2]> = transitions.iter().map(|t| [&t["from"], &t["to"]]).collect();
+    assert!(sent.ends_with(&seen), "sent {sent:?}, seen {seen:?}");
+    let frames = &received["/tactile/dv"];
+    assert!(
+        frames
+            .iter()
+            .all(|f| f["dv_v"].as_array().unwrap().len() == 25)
     );
-    assert!(received["/state"]["to"].is_string());
-    assert!(advertised.contains(&"/tf".to_owned()), "{advertised:?}");
+    let grasped: Vec<&str> = frames
+        .iter()
+        .map(|f| f["state"].as_str().unwrap())
+        .collect();
+    assert!(grasped.contains(&"evaluate"), "{grasped:?}");
 }
 
 #[test]

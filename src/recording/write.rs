@@ -14,7 +14,7 @@ use opencv::core::VectorToVec;
 use serde::Serialize;
 
 use super::RecordingError;
-use super::live::{LiveChannel, LiveServer};
+use super::live::LiveServer;
 use super::scene::{self, CellView};
 use super::schema::{
     CableShapesMessage, CompressedImageMessage, LogMessage, Pose, PoseInFrameMessage, Quaternion,
@@ -60,7 +60,7 @@ pub struct Recorder {
     /// errors name.
     name: PathBuf,
     file: Option<FileSink>,
-    live: Option<LiveSink>,
+    live: Option<Arc<LiveServer>>,
     clock: WallClock,
     view: CellView,
     /// From the first frames read (`prepare`'s), to record Δv.
@@ -75,11 +75,6 @@ struct FileSink {
     /// channels it has messages on.
     channels: BTreeMap<Topic, u16>,
     sequence: u32,
-}
-
-struct LiveSink {
-    server: Arc<LiveServer>,
-    channels: BTreeMap<Topic, LiveChannel>,
 }
 
 impl Recorder {
@@ -102,10 +97,7 @@ impl Recorder {
         Ok(Self {
             name,
             file,
-            live: target.live.map(|server| LiveSink {
-                server,
-                channels: BTreeMap::new(),
-            }),
+            live: target.live,
             clock: WallClock::now(cell_now_s),
             view,
             bias: None,
@@ -167,8 +159,8 @@ impl Recorder {
 
     fn write_bytes(&mut self, topic: Topic, t_s: f64, data: &[u8]) -> Result<(), RecordingError> {
         let log_time_ns = self.clock.log_time_ns(t_s);
-        if let Some(live) = &mut self.live {
-            live.send(topic, data, log_time_ns)?;
+        if let Some(live) = &self.live {
+            live.send(topic, data, log_time_ns);
         }
         match &mut self.file {
             Some(file) => file
@@ -494,19 +486,6 @@ impl FileSink {
             publish_time: log_time_ns,
         };
         self.writer.write_to_known_channel(&header, data)
-    }
-}
-
-impl LiveSink {
-    fn send(&mut self, topic: Topic, data: &[u8], log_time_ns: u64) -> Result<(), RecordingError> {
-        let channel = match self.channels.entry(topic) {
-            std::collections::btree_map::Entry::Occupied(entry) => entry.into_mut(),
-            std::collections::btree_map::Entry::Vacant(entry) => {
-                entry.insert(self.server.channel(topic)?)
-            }
-        };
-        channel.send(data, log_time_ns);
-        Ok(())
     }
 }
 
