@@ -385,11 +385,15 @@ fn run_live_serves_foxglove_websocket_with_tactile_frames_and_transitions() {
     // messages) and every transition from then on, the last one too.
     let report: Value =
         serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
-    let transitions: Vec<&Value> = report["transitions"].as_array().unwrap().iter().collect();
+    let sent: Vec<[&Value; 2]> = report["transitions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| [&t["from"], &t["to"]])
+        .collect();
     let states = &received["/state"];
     assert!(!states.is_empty());
     let seen: Vec<[&Value; 2]> = states.iter().map(|s| [&s["from"], &s["to"]]).collect();
-    let sent: Vec<[&Value; 2]> = transitions.iter().map(|t| [&t["from"], &t["to"]]).collect();
     assert!(sent.ends_with(&seen), "sent {sent:?}, seen {seen:?}");
     let frames = &received["/tactile/dv"];
     assert!(

@@ -40,34 +40,35 @@ impl LiveServer {
     /// Serves on `addr` (port 0: one the system picks) from now on.
     pub fn start(addr: SocketAddr) -> Result<Self, RecordingError> {
         let context = Context::new();
+        let channels = Topic::ALL
+            .into_iter()
+            .map(|topic| {
+                let schema = topic.schema();
+                context
+                    .channel_builder(topic.name())
+                    .message_encoding(schema.message_encoding)
+                    .schema(foxglove::Schema::new(
+                        schema.name,
+                        schema.encoding,
+                        schema.data,
+                    ))
+                    .build_raw()
+                    .map(|channel| (topic, channel))
+            })
+            .collect::<Result<_, _>>()
+            .map_err(|source| RecordingError::Live { addr, source })?;
         let handle = WebSocketServer::new()
             .name(concat!("cablecell ", env!("CARGO_PKG_VERSION")))
             .context(&context)
             .bind(addr.ip().to_string(), addr.port())
             .start_blocking()
             .map_err(|source| RecordingError::Live { addr, source })?;
-        let addr = SocketAddr::new(addr.ip(), handle.port());
-        let mut server = Self {
-            _context: context.clone(),
-            channels: BTreeMap::new(),
-            addr,
+        Ok(Self {
+            addr: SocketAddr::new(addr.ip(), handle.port()),
+            _context: context,
+            channels,
             handle: Some(handle),
-        };
-        for topic in Topic::ALL {
-            let schema = topic.schema();
-            let channel = context
-                .channel_builder(topic.name())
-                .message_encoding(schema.message_encoding)
-                .schema(foxglove::Schema::new(
-                    schema.name,
-                    schema.encoding,
-                    schema.data,
-                ))
-                .build_raw()
-                .map_err(|source| RecordingError::Live { addr, source })?;
-            server.channels.insert(topic, channel);
-        }
-        Ok(server)
+        })
     }
 
     /// The address it serves on (with the port the system picked).
