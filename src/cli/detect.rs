@@ -269,7 +269,7 @@ fn write_outputs(
     }
     if let Some(dir) = overlay {
         create_dir(dir)?;
-        let drawn = draw_overlay(image, output)
+        let drawn = draw_overlay(image, &output.cables)
             .map_err(|e| format!("cannot draw the overlay of {stem}: {e}"))?;
         write_png(&dir.join(format!("{stem}.png")), &drawn)?;
     }

@@ -13,7 +13,7 @@ use cablecell::perception::vision::network::{
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{
-    DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, Pipeline, VisionConfig, VisionOutput,
+    CableInstance, DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, Pipeline, VisionConfig,
 };
 use clap::Args;
 use opencv::core::{Mat, Point, Scalar, Vector};
@@ -223,7 +223,7 @@ pub fn write_png(path: &Path, image: &Mat) -> Result<(), String> {
 
 /// The image with each cable's spline, grasp point and grasp frame's x
 /// axis drawn on it.
-pub fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
+pub fn draw_overlay(image: &Mat, cables: &[CableInstance]) -> opencv::Result<Mat> {
     const COLOURS: [(f64, f64, f64); 6] = [
         (0.0, 255.0, 255.0),
         (255.0, 0.0, 255.0),
@@ -233,7 +233,7 @@ pub fn draw_overlay(image: &Mat, output: &VisionOutput) -> opencv::Result<Mat> {
         (128.0, 255.0, 0.0),
     ];
     let mut drawn = image.clone();
-    for (k, cable) in output.cables.iter().enumerate() {
+    for (k, cable) in cables.iter().enumerate() {
         let (b, g, r) = COLOURS[k % COLOURS.len()];
         let colour = Scalar::new(b, g, r, 0.0);
         draw_line(&mut drawn, &cable.samples_px, colour, 2)?;

@@ -57,7 +57,7 @@ pub struct EvalVisionArgs {
     /// pipeline finds (colours still from the image; at the image's own
     /// size, with no region of interest): what the instance stages count
     /// with a perfect mask, to tell their errors from the mask's.
-    #[arg(long, conflicts_with_all = ["sweep", "overlay"])]
+    #[arg(long, conflicts_with = "sweep")]
     pub labelled_mask: bool,
     /// Print the scores as JSON (`cablecell json-schema eval-vision`, or
     /// `eval-vision-sweep` with --sweep).

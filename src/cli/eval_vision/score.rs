@@ -9,7 +9,7 @@ use cablecell::perception::vision::eval::{
     GroundTruth, ImageScore, label_consistency, score, score_cables,
 };
 use cablecell::perception::vision::{
-    MaskMethod, MaskNetwork, Pipeline, VisionError, VisionOutput, union_mask,
+    CableInstance, MaskMethod, MaskNetwork, Pipeline, VisionError, union_mask,
 };
 use opencv::core::{Mat, Point, Rect, Scalar};
 use opencv::imgproc;
@@ -94,16 +94,18 @@ pub(super) fn evaluate(
                     score: score_cables(&found.cables, &union_mask, &sample.truth)?,
                     timings_ms: found.timings_ms,
                     notes: Vec::new(),
-                    output: None,
+                    cables: found.cables,
+                    mask_used: None,
                 })
             } else {
-                let mut output =
+                let output =
                     pipeline.detect(&sample.image, Some(&mut network as &mut dyn MaskNetwork))?;
                 Ok(Run {
                     score: score(&output, &sample.truth)?,
-                    timings_ms: std::mem::take(&mut output.timings_ms),
-                    notes: std::mem::take(&mut output.notes),
-                    output: Some(output),
+                    timings_ms: output.timings_ms,
+                    notes: output.notes,
+                    cables: output.cables,
+                    mask_used: Some(output.mask_used),
                 })
             }
         };
@@ -118,13 +120,13 @@ pub(super) fn evaluate(
             .entry("total")
             .or_default()
             .push(run.timings_ms.iter().map(|(_, ms)| ms).sum());
-        if let (Some(dir), Some(output)) = (overlay, &run.output) {
-            let drawn = draw_comparison(&sample.image, output, &sample.truth, &run.score)
+        if let Some(dir) = overlay {
+            let drawn = draw_comparison(&sample.image, &run.cables, &sample.truth, &run.score)
                 .map_err(|e| format!("cannot draw the overlay of {}: {e}", sample.stem))?;
             write_png(&dir.join(format!("{}.png", sample.stem)), &drawn)?;
         }
         per_image.push((sample.stem.clone(), run.score));
-        match run.output.map(|output| output.mask_used) {
+        match run.mask_used {
             None => mask_used.labelled += 1,
             Some(MaskMethod::Network) => mask_used.network += 1,
             Some(_) => mask_used.classical += 1,
@@ -179,12 +181,14 @@ pub(super) fn evaluate(
 }
 
 /// One image's run: its score, the stages' times, what the pipeline said
-/// of it, and its whole output when the pipeline found the mask.
+/// of it, the cables it found, and the mask it used when it found one (on
+/// a labelled mask, none).
 struct Run {
     score: ImageScore,
     timings_ms: Vec<(&'static str, f64)>,
     notes: Vec<String>,
-    output: Option<VisionOutput>,
+    cables: Vec<CableInstance>,
+    mask_used: Option<MaskMethod>,
 }
 
 /// `image` with the cables found drawn as `detect --overlay` draws them,
@@ -193,7 +197,7 @@ struct Run {
 /// the detections that match no label.
 fn draw_comparison(
     image: &Mat,
-    output: &VisionOutput,
+    cables: &[CableInstance],
     truth: &GroundTruth,
     image_score: &ImageScore,
 ) -> opencv::Result<Mat> {
@@ -215,7 +219,7 @@ fn draw_comparison(
             false,
         )
     };
-    let mut drawn = draw_overlay(image, output)?;
+    let mut drawn = draw_overlay(image, cables)?;
     for line in &truth.polylines_px {
         draw_line(&mut drawn, line, Scalar::all(255.0), 1)?;
     }
@@ -229,7 +233,7 @@ fn draw_comparison(
         }
     }
     for unlabelled in &image_score.unlabelled {
-        let cable = &output.cables[unlabelled.index];
+        let cable = &cables[unlabelled.index];
         label(
             &mut drawn,
             &format!("#{} not labelled", unlabelled.index),
