@@ -592,6 +592,21 @@ pub fn resize_and_cut(mask: &Mat, size: Size, cut: f64) -> Result<Mat, VisionErr
     Ok(binary)
 }
 
+/// The mask's distance to its nearest background pixel, per pixel
+/// (CV_32F): half the local width on a centre line.
+pub fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
+    let mut distance = Mat::default();
+    imgproc::distance_transform(
+        mask,
+        &mut distance,
+        imgproc::DIST_L2,
+        imgproc::DIST_MASK_3,
+        core::CV_32F,
+    )
+    .map_err(cv("measure the mask's widths"))?;
+    Ok(distance)
+}
+
 /// A CV_8U mask of `rows`×`cols` with every pixel 0.
 pub fn zeros_u8(rows: i32, cols: i32) -> Result<Mat, VisionError> {
     Mat::new_rows_cols_with_default(rows, cols, core::CV_8U, Scalar::all(0.0))

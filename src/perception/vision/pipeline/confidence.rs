@@ -8,13 +8,12 @@
 //! [`VisionConfig::min_confidence`].
 
 use opencv::core::{self, Mat, Size};
-use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::config::MaskMethod;
 #[cfg(doc)]
 use super::config::VisionConfig;
-use crate::perception::vision::error::{VisionError, cv};
+use crate::perception::vision::error::VisionError;
 use crate::perception::vision::mask::{self, BackgroundStats};
 
 /// Lengths, in widths, from which a detection is long enough to be a
@@ -84,21 +83,6 @@ impl Belief {
     }
 }
 
-/// The mask's distance to its nearest background pixel, per pixel
-/// (CV_32F): half the local width on a centre line.
-pub(super) fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
-    let mut distance = Mat::default();
-    imgproc::distance_transform(
-        mask,
-        &mut distance,
-        imgproc::DIST_L2,
-        imgproc::DIST_MASK_3,
-        core::CV_32F,
-    )
-    .map_err(cv("measure the mask's widths"))?;
-    Ok(distance)
-}
-
 /// The confidence in [0, 1] that the path `points_px` (in `half_widths`'
 /// pixels), `length_px` long, is a cable; with the network's `belief`,
 /// times how sure it was along the path (see [`Belief::along`]).
@@ -146,8 +130,10 @@ fn median(values: &mut [f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use opencv::core::{CV_8UC1, Point, Scalar};
+    use opencv::imgproc;
 
     use super::*;
+    use crate::perception::vision::mask::half_widths;
 
     fn mask_with(draw: impl Fn(&mut Mat)) -> Mat {
         let mut mask =

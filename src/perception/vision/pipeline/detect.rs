@@ -271,7 +271,7 @@ impl Pipeline {
         let mut straight_dropped = 0;
         let mut unconfident_dropped = 0;
         let mut plain_around = None;
-        let half_widths = confidence::half_widths(mask_roi)?;
+        let half_widths = mask::half_widths(mask_roi)?;
         for path in paths {
             let confidence = confidence::confidence(
                 &half_widths,

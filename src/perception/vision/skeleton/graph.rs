@@ -1,12 +1,15 @@
 //! The skeleton as a graph: end points and junctions are its nodes, the
-//! pixel runs between them its edges. Spurs are pruned, and junctions
-//! that are one crossing merged.
+//! pixel runs between them its edges. Spurs are pruned, junctions that
+//! are one crossing merged, and runs that two cables share split in two.
 
 use std::collections::HashSet;
 
+use opencv::core::Mat;
+use opencv::prelude::*;
+
 use super::direction::{bend_rad, direction_leaving};
 use super::thin::Grid;
-use crate::perception::vision::paths::polyline_length;
+use crate::perception::vision::paths::{polyline_length, unit};
 
 /// Junctions joined by an edge shorter than this many cable widths are one
 /// crossing: two cables crossing at 25° overlap for about 2.4 widths.
@@ -46,6 +49,9 @@ pub(super) struct Edge {
     pub ends: [usize; 2],
     /// From the pixel of `ends[0]` it leaves to the pixel of `ends[1]`.
     pub pixels: Vec<usize>,
+    /// Where two cables share the run, its cable's points beside the
+    /// skeleton (see [`Graph::split_shared`]); its pixels otherwise.
+    pub points_px: Option<Vec<[f64; 2]>>,
     pub length_px: f64,
     pub alive: bool,
     /// Inside a merged junction: not a branch of it.
@@ -125,6 +131,7 @@ impl Graph {
                             edges.push(Edge {
                                 ends: [n, m],
                                 pixels: vec![p, q],
+                                points_px: None,
                                 length_px: 1.0,
                                 alive: true,
                                 internal: false,
@@ -170,6 +177,7 @@ impl Graph {
                     edges.push(Edge {
                         ends: [n, end],
                         pixels,
+                        points_px: None,
                         length_px: polyline_length(&pts),
                         alive: true,
                         internal: false,
@@ -303,12 +311,7 @@ impl Graph {
                     if branches.len() != 3 {
                         return false;
                     }
-                    let centre = self.nodes[n].centre_px;
-                    let into = self.branch_direction((e, side), centre, width_px);
-                    branches.iter().filter(|&&br| br != (e, side)).all(|&br| {
-                        bend_rad(self.branch_direction(br, centre, width_px), into)
-                            < SPLIT_CONTINUE_RAD
-                    })
+                    self.all_run_on_into((e, side), branches, self.nodes[n].centre_px, width_px)
                 });
             // Joined by this run and a far longer one: a cable that loops
             // back across itself at a shallow angle, this run where its two
@@ -348,6 +351,66 @@ impl Graph {
             .collect()
     }
 
+    /// Whether every branch but `into` of a junction at `centre` runs on
+    /// into `into` (within [`SPLIT_CONTINUE_RAD`]): where two cables meet
+    /// to run on together, or to cross at a shallow angle.
+    pub(super) fn all_run_on_into(
+        &self,
+        into: Branch,
+        branches: &[Branch],
+        centre: [f64; 2],
+        width_px: f64,
+    ) -> bool {
+        let into_dir = self.branch_direction(into, centre, width_px);
+        branches.iter().filter(|&&br| br != into).all(|&br| {
+            bend_rad(self.branch_direction(br, centre, width_px), into_dir) < SPLIT_CONTINUE_RAD
+        })
+    }
+
+    /// Splits the run `e` that two cables share into two: where they lie
+    /// together, the skeleton runs down the middle of the pair. The run is
+    /// moved to the left (as it goes from its first end to its second) and
+    /// a twin, which it returns, to the right, to where each cable's centre
+    /// line lies given their half widths (`half_width_px`: left, right) and
+    /// the pair's (`half_widths`, the mask's distance transform): a cable's
+    /// half width in from the pair's edge where they lie side by side, on
+    /// the skeleton where one lies on the other.
+    pub(super) fn split_shared(
+        &mut self,
+        e: usize,
+        half_widths: &Mat,
+        half_width_px: [f64; 2],
+    ) -> usize {
+        let pts: Vec<[f64; 2]> = self.outward((e, 0));
+        let k = ((half_width_px[0] + half_width_px[1]).round() as usize).max(2);
+        let last = pts.len() - 1;
+        let (mut left, mut right) = (Vec::new(), Vec::new());
+        for (i, &p) in pts.iter().enumerate() {
+            let Some(t) = unit(pts[i.saturating_sub(k)], pts[(i + k).min(last)]) else {
+                left.push(p);
+                right.push(p);
+                continue;
+            };
+            let pair_px = half_width_at(half_widths, p);
+            let normal = [-t[1], t[0]];
+            let [l, r] = half_width_px.map(|own| (pair_px - own).max(0.0));
+            left.push([p[0] + l * normal[0], p[1] + l * normal[1]]);
+            right.push([p[0] - r * normal[0], p[1] - r * normal[1]]);
+        }
+        let edge = &mut self.edges[e];
+        edge.points_px = Some(left);
+        let twin = Edge {
+            ends: edge.ends,
+            pixels: edge.pixels.clone(),
+            points_px: Some(right),
+            length_px: edge.length_px,
+            alive: edge.alive,
+            internal: edge.internal,
+        };
+        self.edges.push(twin);
+        self.edges.len() - 1
+    }
+
     /// Makes the run `e` between two junctions part of one crossing: the
     /// merged junctions at its ends become one (`root` gives each node's).
     pub(super) fn merge_across(&mut self, e: usize, root: &mut [usize]) {
@@ -361,10 +424,13 @@ impl Graph {
         self.edges[e].internal = true;
     }
 
-    /// Pixels of a branch going out of its junction.
+    /// Points of a branch going out of its junction.
     pub(super) fn outward(&self, (e, side): Branch) -> Vec<[f64; 2]> {
-        let px = &self.edges[e].pixels;
-        let mut pts: Vec<[f64; 2]> = px.iter().map(|&i| self.grid.xy(i)).collect();
+        let edge = &self.edges[e];
+        let mut pts: Vec<[f64; 2]> = match &edge.points_px {
+            Some(points) => points.clone(),
+            None => edge.pixels.iter().map(|&i| self.grid.xy(i)).collect(),
+        };
         if side == 1 {
             pts.reverse();
         }
@@ -381,6 +447,14 @@ impl Graph {
     ) -> [f64; 2] {
         direction_leaving(&self.outward(branch), centre, width_px)
     }
+}
+
+/// The mask's half width at `p` (`half_widths`: its distance transform);
+/// 0 outside it.
+pub(super) fn half_width_at(half_widths: &Mat, p: [f64; 2]) -> f64 {
+    half_widths
+        .at_2d::<f32>(p[1].round() as i32, p[0].round() as i32)
+        .map_or(0.0, |h| f64::from(*h))
 }
 
 #[cfg(test)]
@@ -461,7 +535,7 @@ mod tests {
         let root = merge_cheaper_crossings(&mut graph, root, width_px);
         assert_eq!(branch_counts(&graph, &root), vec![4]);
         // Each cable goes on through the crossing.
-        let partner = pair_branches(&graph, &root, None, width_px).unwrap();
+        let partner = pair_branches(&graph, &root, None, width_px, &[]).unwrap();
         let far_end = |branch: Branch| *graph.outward(branch).last().unwrap();
         let near = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) < 4.0;
         for (from, to) in [

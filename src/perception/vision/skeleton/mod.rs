@@ -10,7 +10,10 @@
 //! cable widths are merged, because two cables crossing at a shallow angle
 //! thin into two 3-way junctions rather than one 4-way one; so are two
 //! 3-way junctions further apart whose other branches pair far more
-//! cheaply as one crossing than as two junctions. At each
+//! cheaply as one crossing than as two junctions. Two cables lying
+//! together for a stretch thin into one run down the middle of the pair,
+//! forked at each end: that run is split into one for each cable, moved
+//! onto its centre line. At each
 //! (merged) junction the branches are paired so that the total bending is
 //! least, each branch's direction followed back along its curve into the
 //! junction, and, given the image, pairing branches of unlike colour costs
@@ -27,7 +30,8 @@
 //!   junctions merged;
 //! - `direction.rs`: a branch's direction at its junction;
 //! - `pairing.rs`: junctions merged where one crossing pairs their branches
-//!   more cheaply, and each junction's branches paired;
+//!   more cheaply, runs that two cables share found, and each junction's
+//!   branches paired;
 //! - `walk.rs`: the paths walked through the pairings, and cut at corners.
 
 mod direction;
@@ -71,10 +75,11 @@ pub fn paths_from_mask(
     let root = graph.merge_junctions(width_px);
     graph.prune_spurs(spur_px, &root);
     let root = pairing::merge_cheaper_crossings(&mut graph, root, width_px);
+    let junctions = pairing::junction_branches(&graph, &root).len();
+    let shared = pairing::share_runs(&mut graph, &root, mask, width_px)?;
     // Branches per merged junction, and their least-cost pairing (bending,
     // and colour when the image is given).
-    let junctions = pairing::junction_branches(&graph, &root).len();
-    let partner = pairing::pair_branches(&graph, &root, image, width_px)?;
+    let partner = pairing::pair_branches(&graph, &root, image, width_px, &shared)?;
     let paths = walk::walk_paths(&graph, &partner, mask, width_px);
     // Superpixel walks have their own limit on turning, and their coarse
     // node-to-node polylines would read as corners here.

@@ -2,15 +2,18 @@
 //! it bends and keeps its colour, so the branches are paired at least
 //! total cost of bending and colour difference; a loop's two ends are not
 //! paired with each other. Two junctions whose branches pair far more
-//! cheaply as one crossing than apart are first merged into one.
+//! cheaply as one crossing than apart are first merged into one. A run
+//! that two cables share, forked at both ends, carries both: its forks'
+//! branches are paired through it and a twin, side by side.
 
 use std::collections::{HashMap, HashSet};
 
 use opencv::core::Mat;
 
 use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
-use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS};
+use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS, half_width_at};
 use crate::perception::vision::error::VisionError;
+use crate::perception::vision::mask::half_widths;
 use crate::perception::vision::paths::{delta_e, median_colour_lab};
 
 /// Cost, in radians of bending, of leaving a branch unpaired at a junction
@@ -36,6 +39,11 @@ const COLOUR_SAME_DELTA_E: f64 = 10.0;
 /// against orange is about 40); between this and [`COLOUR_SAME_DELTA_E`]
 /// the cost grows in proportion.
 const COLOUR_FULL_DELTA_E: f64 = 40.0;
+
+/// Cost, in radians, of two cables crossing over along a run they share
+/// (see [`pair_along_shared`]): less than a full colour difference, so
+/// that where the colours say the cables crossed, they did.
+const SIDE_SWAP_COST_RAD: f64 = 0.5;
 
 /// Above this many branches at one junction the exact least-cost pairing
 /// is too costly and pairs are taken greedily, cheapest first.
@@ -124,6 +132,141 @@ pub(super) fn merge_cheaper_crossings(
     root
 }
 
+/// A run of skeleton that two cables share, split in two (see
+/// [`share_runs`]): the run, moved to the left cable, and its twin, to the
+/// right one, and at each fork the branches on the left and on the right
+/// (as the run goes from its first end to its second).
+pub(super) struct SharedRun {
+    run: usize,
+    twin: usize,
+    forks: [[Branch; 2]; 2],
+}
+
+/// Finds the runs that two cables share and splits each in two
+/// (`Graph::split_shared`): a run between two 3-way junctions whose other
+/// two branches at each end both run on into it. Two cables that lie
+/// together for a stretch (or cross at so shallow an angle that they
+/// overlap for longer than [`SPLIT_CROSSING_WIDTHS`]) thin into one run
+/// down the middle of the pair with such a fork at each end; paired as two
+/// junctions, one cable would go on along the run and the other end at
+/// both forks, as two more.
+pub(super) fn share_runs(
+    graph: &mut Graph,
+    root: &[usize],
+    mask: &Mat,
+    width_px: f64,
+) -> Result<Vec<SharedRun>, VisionError> {
+    let branches = junction_branches(graph, root);
+    let mut found: Vec<(usize, [[Branch; 2]; 2])> = Vec::new();
+    let mut taken = HashSet::new();
+    for (e, edge) in graph.edges.iter().enumerate() {
+        let roots = [root[edge.ends[0]], root[edge.ends[1]]];
+        if !edge.alive || edge.internal || roots[0] == roots[1] {
+            continue;
+        }
+        let (Some(at_0), Some(at_1)) = (branches.get(&roots[0]), branches.get(&roots[1])) else {
+            continue;
+        };
+        let runs_between = at_0.iter().filter(|x| at_1.iter().any(|y| y.0 == x.0));
+        let forked = |at: &[Branch], side: usize| {
+            let centre = graph.nodes[roots[side]].centre_px;
+            at.len() == 3 && graph.all_run_on_into((e, side), at, centre, width_px)
+        };
+        if runs_between.count() != 1
+            || !forked(at_0, 0)
+            || !forked(at_1, 1)
+            || roots.iter().any(|r| taken.contains(r))
+        {
+            continue;
+        }
+        taken.extend(roots);
+        let forks = [0, 1].map(|side| {
+            let r = roots[side];
+            let centre = graph.nodes[r].centre_px;
+            let along = graph.branch_direction((e, side), centre, width_px);
+            // The run leaves its second fork back towards the first.
+            let ahead = if side == 0 { along } else { along.map(|c| -c) };
+            let left_of_run = |b: Branch| {
+                let d = graph.branch_direction(b, centre, width_px);
+                ahead[0] * d[1] - ahead[1] * d[0]
+            };
+            let mut outer: Vec<Branch> =
+                branches[&r].iter().copied().filter(|b| b.0 != e).collect();
+            outer.sort_by(|x, y| left_of_run(*y).total_cmp(&left_of_run(*x)));
+            [outer[0], outer[1]]
+        });
+        found.push((e, forks));
+    }
+    if found.is_empty() {
+        return Ok(Vec::new());
+    }
+    let half_widths = half_widths(mask)?;
+    Ok(found
+        .into_iter()
+        .map(|(run, forks)| {
+            // Each side's cable's half width, where it runs apart from the
+            // other past the forks.
+            let own_px = [0, 1].map(|side| {
+                let mut halves: Vec<f64> = forks
+                    .iter()
+                    .flat_map(|fork| graph.outward(fork[side]))
+                    .map(|p| half_width_at(&half_widths, p))
+                    .filter(|&h| h > 0.0)
+                    .collect();
+                halves.sort_by(f64::total_cmp);
+                halves
+                    .get(halves.len() / 2)
+                    .copied()
+                    .unwrap_or(0.5 * width_px)
+            });
+            SharedRun {
+                run,
+                twin: graph.split_shared(run, &half_widths, own_px),
+                forks,
+            }
+        })
+        .collect())
+}
+
+/// The pairings at the two forks of a shared run: at the first fork, the
+/// branch on the left joined to the run and the one on the right to its
+/// twin; at the second, the same, so that two cables lying together do
+/// not cross; or the other way, where colours say so. Given the image,
+/// branches of unlike colour cost more to join, as at a crossing, and
+/// [`SIDE_SWAP_COST_RAD`] is what crossing over costs against them: two
+/// cables crossing at a shallow angle do cross.
+fn pair_along_shared(
+    graph: &Graph,
+    shared: &SharedRun,
+    image: Option<&Mat>,
+    width_px: f64,
+) -> Result<[(Branch, Branch); 4], VisionError> {
+    let [[a_left, a_right], [b_left, b_right]] = shared.forks;
+    let colours = match image {
+        Some(image) => {
+            let outer = [a_left, a_right, b_left, b_right];
+            let outward: Vec<_> = outer.iter().map(|&b| graph.outward(b)).collect();
+            branch_colours_lab(&outward, image, width_px)?
+        }
+        None => vec![None; 4],
+    };
+    let join = |a: usize, b: usize| colour_cost(colours[a], colours[b]);
+    let alongside = join(0, 2) + join(1, 3);
+    let crossed = join(0, 3) + join(1, 2) + 2.0 * SIDE_SWAP_COST_RAD;
+    let (b_run, b_twin) = if alongside <= crossed {
+        (b_left, b_right)
+    } else {
+        (b_right, b_left)
+    };
+    let (run, twin) = (shared.run, shared.twin);
+    Ok([
+        (a_left, (run, 0)),
+        ((run, 1), b_run),
+        (a_right, (twin, 0)),
+        ((twin, 1), b_twin),
+    ])
+}
+
 /// What the pairing `pairs` of branches whose pairings cost `cost` costs,
 /// each branch it leaves unpaired [`UNPAIRED_COST_RAD`].
 fn pairing_cost(cost: &[Vec<f64>], pairs: &[(usize, usize)]) -> f64 {
@@ -140,10 +283,24 @@ pub(super) fn pair_branches(
     root: &[usize],
     image: Option<&Mat>,
     width_px: f64,
+    shared_runs: &[SharedRun],
 ) -> Result<HashMap<Branch, Branch>, VisionError> {
     let branches = junction_branches(graph, root);
     let mut partner: HashMap<Branch, Branch> = HashMap::new();
-    let mut junctions: Vec<usize> = branches.keys().copied().collect();
+    let mut forks = HashSet::new();
+    for shared in shared_runs {
+        let [a, b] = graph.edges[shared.run].ends;
+        forks.extend([root[a], root[b]]);
+        for (x, y) in pair_along_shared(graph, shared, image, width_px)? {
+            partner.insert(x, y);
+            partner.insert(y, x);
+        }
+    }
+    let mut junctions: Vec<usize> = branches
+        .keys()
+        .copied()
+        .filter(|j| !forks.contains(j))
+        .collect();
     junctions.sort_unstable();
     for j in &junctions {
         let list = &branches[j];
@@ -211,13 +368,19 @@ fn branch_colours_lab(
 fn add_colour_costs(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
     for (row, a) in cost.iter_mut().zip(colours_lab) {
         for (c, b) in row.iter_mut().zip(colours_lab) {
-            if let (Some(a), Some(b)) = (a, b) {
-                let over = (delta_e(*a, *b) - COLOUR_SAME_DELTA_E)
-                    / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
-                *c += COLOUR_COST_RAD * over.clamp(0.0, 1.0);
-            }
+            *c += colour_cost(*a, *b);
         }
     }
+}
+
+/// The cost of joining two branches of these colours (see
+/// [`COLOUR_COST_RAD`]); nothing where either colour is unknown.
+fn colour_cost(a: Option<[f64; 3]>, b: Option<[f64; 3]>) -> f64 {
+    let (Some(a), Some(b)) = (a, b) else {
+        return 0.0;
+    };
+    let over = (delta_e(a, b) - COLOUR_SAME_DELTA_E) / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
+    COLOUR_COST_RAD * over.clamp(0.0, 1.0)
 }
 
 /// Forbids pairing a crossing's two branches that are the ends of one edge,
@@ -296,7 +459,74 @@ fn best_pairing(cost: &[Vec<f64>]) -> Vec<(usize, usize)> {
 
 #[cfg(test)]
 mod tests {
+    use opencv::core::{Point, Scalar, Vector};
+    use opencv::imgproc;
+
+    use super::super::paths_from_mask;
     use super::*;
+    use crate::perception::vision::mask::zeros_u8;
+
+    #[test]
+    fn two_cables_lying_together_for_a_stretch_are_two_paths_along_their_own_lines() {
+        // Two 10 px cables that come together from above and below, lie
+        // side by side (centre lines at y = 100 and 110) from x = 80 to
+        // 320, and part again: one run of skeleton down y = 105 between
+        // two forks, too far apart to be one crossing.
+        let cables = [
+            [(20, 40), (80, 100), (320, 100), (380, 40)],
+            [(20, 170), (80, 110), (320, 110), (380, 170)],
+        ];
+        let mut mask = zeros_u8(220, 400).unwrap();
+        for cable in cables {
+            let line: Vector<Point> = cable.iter().map(|&(x, y)| Point::new(x, y)).collect();
+            let lines = Vector::<Vector<Point>>::from_iter([line]);
+            imgproc::polylines(
+                &mut mask,
+                &lines,
+                false,
+                Scalar::all(255.0),
+                10,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        let found = paths_from_mask(&mask, None, 20.0).unwrap();
+        assert_eq!(
+            found.paths.len(),
+            2,
+            "{:?}",
+            found.paths.iter().map(|p| p.length_px).collect::<Vec<_>>()
+        );
+        let mut middle_y: Vec<f64> = found
+            .paths
+            .iter()
+            .map(|path| {
+                let along: Vec<f64> = path
+                    .points_px
+                    .iter()
+                    .filter(|p| (140.0..260.0).contains(&p[0]))
+                    .map(|p| p[1])
+                    .collect();
+                assert!(!along.is_empty());
+                along.iter().sum::<f64>() / along.len() as f64
+            })
+            .collect();
+        middle_y.sort_by(f64::total_cmp);
+        // Each on its own cable's centre line, not the pair's middle.
+        assert!((middle_y[0] - 100.0).abs() < 1.5, "{middle_y:?}");
+        assert!((middle_y[1] - 110.0).abs() < 1.5, "{middle_y:?}");
+        // Each runs from its cable's one end to its other: from top left
+        // to top right, or bottom left to bottom right.
+        for path in &found.paths {
+            let (first, last) = (path.points_px[0], path.points_px[path.points_px.len() - 1]);
+            assert!(
+                (first[1] < 105.0) == (last[1] < 105.0),
+                "{first:?} {last:?}"
+            );
+            assert!(path.length_px > 380.0, "{}", path.length_px);
+        }
+    }
 
     #[test]
     fn colour_costs_pair_like_colours_and_let_shading_pass() {
