@@ -9,12 +9,13 @@
 use std::collections::{HashMap, HashSet};
 
 use opencv::core::Mat;
+use opencv::prelude::*;
 
 use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
 use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS, half_width_at};
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::mask::half_widths;
-use crate::perception::vision::paths::{delta_e, median_colour_lab};
+use crate::perception::vision::paths::{delta_e, median_colour_lab, near_border};
 
 /// Cost, in radians of bending, of leaving a branch unpaired at a junction
 /// (the cable ends there). Two branches are joined rather than both left
@@ -44,6 +45,11 @@ const COLOUR_FULL_DELTA_E: f64 = 40.0;
 /// (see [`pair_along_shared`]): less than a full colour difference, so
 /// that where the colours say the cables crossed, they did.
 const SIDE_SWAP_COST_RAD: f64 = 0.5;
+
+/// How many times as wide as one of its cables a run to the border must
+/// be to be shared by two (see [`share_runs`]): two side by side are
+/// twice as wide.
+const PAIR_WIDTHS: f64 = 1.5;
 
 /// Above this many branches at one junction the exact least-cost pairing
 /// is too costly and pairs are taken greedily, cheapest first.
@@ -134,22 +140,26 @@ pub(super) fn merge_cheaper_crossings(
 
 /// A run of skeleton that two cables share, split in two (see
 /// [`share_runs`]): the run, moved to the left cable, and its twin, to the
-/// right one, and at each fork the branches on the left and on the right
-/// (as the run goes from its first end to its second).
+/// right one, and at each end's fork the branches on the left and on the
+/// right (as the run goes from its first end to its second); no fork
+/// where the two leave the view together.
 pub(super) struct SharedRun {
     run: usize,
     twin: usize,
-    forks: [[Branch; 2]; 2],
+    forks: [Option<[Branch; 2]>; 2],
 }
 
 /// Finds the runs that two cables share and splits each in two
-/// (`Graph::split_shared`): a run between two 3-way junctions whose other
-/// two branches at each end both run on into it. Two cables that lie
-/// together for a stretch (or cross at so shallow an angle that they
-/// overlap for longer than [`SPLIT_CROSSING_WIDTHS`]) thin into one run
-/// down the middle of the pair with such a fork at each end; paired as two
-/// junctions, one cable would go on along the run and the other end at
-/// both forks, as two more.
+/// (`Graph::split_shared`): a run from a 3-way junction whose other two
+/// branches both run on into it, to another such junction (the only run
+/// between them) or to the image's border. Two cables that lie together
+/// for a stretch (or cross at so shallow an angle that they overlap for
+/// longer than [`SPLIT_CROSSING_WIDTHS`]) thin into one run down the
+/// middle of the pair with such a fork where they part; paired as a
+/// junction, one cable would go on along the run and the other end at the
+/// fork. A run to the border must also be [`PAIR_WIDTHS`] as wide as the
+/// cables past its fork: a cable at the border with paint forked off it
+/// has the fork, not the width.
 pub(super) fn share_runs(
     graph: &mut Graph,
     root: &[usize],
@@ -157,78 +167,105 @@ pub(super) fn share_runs(
     width_px: f64,
 ) -> Result<Vec<SharedRun>, VisionError> {
     let branches = junction_branches(graph, root);
-    let mut found: Vec<(usize, [[Branch; 2]; 2])> = Vec::new();
+    let size_px = [f64::from(mask.cols()), f64::from(mask.rows())];
+    let mut found: Vec<(usize, [Option<[Branch; 2]>; 2])> = Vec::new();
     let mut taken = HashSet::new();
     for (e, edge) in graph.edges.iter().enumerate() {
         let roots = [root[edge.ends[0]], root[edge.ends[1]]];
         if !edge.alive || edge.internal || roots[0] == roots[1] {
             continue;
         }
-        let (Some(at_0), Some(at_1)) = (branches.get(&roots[0]), branches.get(&roots[1])) else {
-            continue;
-        };
-        let runs_between = at_0.iter().filter(|x| at_1.iter().any(|y| y.0 == x.0));
-        let forked = |at: &[Branch], side: usize| {
-            let centre = graph.nodes[roots[side]].centre_px;
-            at.len() == 3 && graph.all_run_on_into((e, side), at, centre, width_px)
-        };
-        if runs_between.count() != 1
-            || !forked(at_0, 0)
-            || !forked(at_1, 1)
-            || roots.iter().any(|r| taken.contains(r))
-        {
-            continue;
-        }
-        taken.extend(roots);
-        let forks = [0, 1].map(|side| {
+        // The fork at one end of the run: its other two branches, on the
+        // left of the run and on the right.
+        let fork = |side: usize| -> Option<[Branch; 2]> {
             let r = roots[side];
+            let at = branches.get(&r)?;
             let centre = graph.nodes[r].centre_px;
+            if at.len() != 3
+                || taken.contains(&r)
+                || !graph.all_run_on_into((e, side), at, centre, width_px)
+            {
+                return None;
+            }
             let along = graph.branch_direction((e, side), centre, width_px);
-            // The run leaves its second fork back towards the first.
+            // The run leaves its second end back towards the first.
             let ahead = if side == 0 { along } else { along.map(|c| -c) };
             let left_of_run = |b: Branch| {
                 let d = graph.branch_direction(b, centre, width_px);
                 ahead[0] * d[1] - ahead[1] * d[0]
             };
-            let mut outer: Vec<Branch> =
-                branches[&r].iter().copied().filter(|b| b.0 != e).collect();
+            let mut outer: Vec<Branch> = at.iter().copied().filter(|b| b.0 != e).collect();
             outer.sort_by(|x, y| left_of_run(*y).total_cmp(&left_of_run(*x)));
-            [outer[0], outer[1]]
-        });
-        found.push((e, forks));
+            Some([outer[0], outer[1]])
+        };
+        let at_border = |side: usize| {
+            let node = &graph.nodes[edge.ends[side]];
+            node.kind == NodeKind::End && near_border(node.centre_px, size_px, width_px + 2.0)
+        };
+        let forks = [fork(0), fork(1)];
+        let shared = match forks {
+            [Some(_), Some(_)] => {
+                let at_1 = &branches[&roots[1]];
+                branches[&roots[0]]
+                    .iter()
+                    .filter(|x| at_1.iter().any(|y| y.0 == x.0))
+                    .count()
+                    == 1
+            }
+            [Some(_), None] => at_border(1),
+            [None, Some(_)] => at_border(0),
+            [None, None] => false,
+        };
+        if shared {
+            taken.extend(roots);
+            found.push((e, forks));
+        }
     }
     if found.is_empty() {
         return Ok(Vec::new());
     }
     let half_widths = half_widths(mask)?;
-    Ok(found
-        .into_iter()
-        .map(|(run, forks)| {
-            // Each side's cable's half width, where it runs apart from the
-            // other past the forks.
-            let own_px = [0, 1].map(|side| {
-                let mut halves: Vec<f64> = forks
-                    .iter()
-                    .flat_map(|fork| graph.outward(fork[side]))
-                    .map(|p| half_width_at(&half_widths, p))
-                    .filter(|&h| h > 0.0)
-                    .collect();
-                halves.sort_by(f64::total_cmp);
-                halves
-                    .get(halves.len() / 2)
-                    .copied()
-                    .unwrap_or(0.5 * width_px)
-            });
-            SharedRun {
-                run,
-                twin: graph.split_shared(run, &half_widths, own_px),
-                forks,
+    let mut shared = Vec::new();
+    for (run, forks) in found {
+        // Each side's cable's half width, where it runs apart from the
+        // other past the forks.
+        let own_px = [0, 1].map(|side| {
+            let mut halves: Vec<f64> = forks
+                .iter()
+                .flatten()
+                .flat_map(|fork| graph.outward(fork[side]))
+                .map(|p| half_width_at(&half_widths, p))
+                .filter(|&h| h > 0.0)
+                .collect();
+            median(&mut halves).unwrap_or(0.5 * width_px)
+        });
+        if forks.contains(&None) {
+            let mut pair: Vec<f64> = graph
+                .outward((run, 0))
+                .into_iter()
+                .map(|p| half_width_at(&half_widths, p))
+                .collect();
+            let pair_px = median(&mut pair).unwrap_or(0.0);
+            if pair_px < 0.5 * PAIR_WIDTHS * (own_px[0] + own_px[1]) {
+                continue;
             }
-        })
-        .collect())
+        }
+        shared.push(SharedRun {
+            run,
+            twin: graph.split_shared(run, &half_widths, own_px),
+            forks,
+        });
+    }
+    Ok(shared)
 }
 
-/// The pairings at the two forks of a shared run: at the first fork, the
+/// The middle of `values`, sorted in place; `None` when empty.
+fn median(values: &mut [f64]) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied()
+}
+
+/// The pairings at the forks of a shared run: at the first fork, the
 /// branch on the left joined to the run and the one on the right to its
 /// twin; at the second, the same, so that two cables lying together do
 /// not cross; or the other way, where colours say so. Given the image,
@@ -240,8 +277,14 @@ fn pair_along_shared(
     shared: &SharedRun,
     image: Option<&Mat>,
     width_px: f64,
-) -> Result<[(Branch, Branch); 4], VisionError> {
-    let [[a_left, a_right], [b_left, b_right]] = shared.forks;
+) -> Result<Vec<(Branch, Branch)>, VisionError> {
+    let (run, twin) = (shared.run, shared.twin);
+    let [[a_left, a_right], [b_left, b_right]] = match shared.forks {
+        [Some(a), Some(b)] => [a, b],
+        [Some([left, right]), None] => return Ok(vec![(left, (run, 0)), (right, (twin, 0))]),
+        [None, Some([left, right])] => return Ok(vec![(left, (run, 1)), (right, (twin, 1))]),
+        [None, None] => return Ok(Vec::new()),
+    };
     let colours = match image {
         Some(image) => {
             let outer = [a_left, a_right, b_left, b_right];
@@ -258,8 +301,7 @@ fn pair_along_shared(
     } else {
         (b_right, b_left)
     };
-    let (run, twin) = (shared.run, shared.twin);
-    Ok([
+    Ok(vec![
         (a_left, (run, 0)),
         ((run, 1), b_run),
         (a_right, (twin, 0)),
@@ -289,8 +331,12 @@ pub(super) fn pair_branches(
     let mut partner: HashMap<Branch, Branch> = HashMap::new();
     let mut forks = HashSet::new();
     for shared in shared_runs {
-        let [a, b] = graph.edges[shared.run].ends;
-        forks.extend([root[a], root[b]]);
+        let ends = graph.edges[shared.run].ends;
+        for (end, fork) in ends.iter().zip(shared.forks) {
+            if fork.is_some() {
+                forks.insert(root[*end]);
+            }
+        }
         for (x, y) in pair_along_shared(graph, shared, image, width_px)? {
             partner.insert(x, y);
             partner.insert(y, x);
@@ -465,6 +511,40 @@ mod tests {
     use super::super::paths_from_mask;
     use super::*;
     use crate::perception::vision::mask::zeros_u8;
+    use crate::perception::vision::paths::polyline_length;
+
+    /// The paths found in a 220 × 400 mask of `lines`, each a polyline
+    /// through its points, with its width in pixels.
+    fn paths_of(lines: &[(&[(i32, i32)], i32)]) -> Vec<Vec<[f64; 2]>> {
+        let mut mask = zeros_u8(220, 400).unwrap();
+        for &(points, width) in lines {
+            let line: Vector<Point> = points.iter().map(|&(x, y)| Point::new(x, y)).collect();
+            let lines = Vector::<Vector<Point>>::from_iter([line]);
+            imgproc::polylines(
+                &mut mask,
+                &lines,
+                false,
+                Scalar::all(255.0),
+                width,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        let found = paths_from_mask(&mask, None, 20.0).unwrap();
+        found.paths.into_iter().map(|path| path.points_px).collect()
+    }
+
+    /// The mean y of `path`'s points from x = 140 to 260.
+    fn middle_y(path: &[[f64; 2]]) -> f64 {
+        let along: Vec<f64> = path
+            .iter()
+            .filter(|p| (140.0..260.0).contains(&p[0]))
+            .map(|p| p[1])
+            .collect();
+        assert!(!along.is_empty());
+        along.iter().sum::<f64>() / along.len() as f64
+    }
 
     #[test]
     fn two_cables_lying_together_for_a_stretch_are_two_paths_along_their_own_lines() {
@@ -472,60 +552,55 @@ mod tests {
         // side by side (centre lines at y = 100 and 110) from x = 80 to
         // 320, and part again: one run of skeleton down y = 105 between
         // two forks, too far apart to be one crossing.
-        let cables = [
-            [(20, 40), (80, 100), (320, 100), (380, 40)],
-            [(20, 170), (80, 110), (320, 110), (380, 170)],
-        ];
-        let mut mask = zeros_u8(220, 400).unwrap();
-        for cable in cables {
-            let line: Vector<Point> = cable.iter().map(|&(x, y)| Point::new(x, y)).collect();
-            let lines = Vector::<Vector<Point>>::from_iter([line]);
-            imgproc::polylines(
-                &mut mask,
-                &lines,
-                false,
-                Scalar::all(255.0),
-                10,
-                imgproc::LINE_8,
-                0,
-            )
-            .unwrap();
-        }
-        let found = paths_from_mask(&mask, None, 20.0).unwrap();
-        assert_eq!(
-            found.paths.len(),
-            2,
-            "{:?}",
-            found.paths.iter().map(|p| p.length_px).collect::<Vec<_>>()
-        );
-        let mut middle_y: Vec<f64> = found
-            .paths
-            .iter()
-            .map(|path| {
-                let along: Vec<f64> = path
-                    .points_px
-                    .iter()
-                    .filter(|p| (140.0..260.0).contains(&p[0]))
-                    .map(|p| p[1])
-                    .collect();
-                assert!(!along.is_empty());
-                along.iter().sum::<f64>() / along.len() as f64
-            })
-            .collect();
-        middle_y.sort_by(f64::total_cmp);
+        let paths = paths_of(&[
+            (&[(20, 40), (80, 100), (320, 100), (380, 40)], 10),
+            (&[(20, 170), (80, 110), (320, 110), (380, 170)], 10),
+        ]);
+        assert_eq!(paths.len(), 2, "{paths:?}");
+        let mut middles: Vec<f64> = paths.iter().map(|path| middle_y(path)).collect();
+        middles.sort_by(f64::total_cmp);
         // Each on its own cable's centre line, not the pair's middle.
-        assert!((middle_y[0] - 100.0).abs() < 1.5, "{middle_y:?}");
-        assert!((middle_y[1] - 110.0).abs() < 1.5, "{middle_y:?}");
+        assert!((middles[0] - 100.0).abs() < 1.5, "{middles:?}");
+        assert!((middles[1] - 110.0).abs() < 1.5, "{middles:?}");
         // Each runs from its cable's one end to its other: from top left
         // to top right, or bottom left to bottom right.
-        for path in &found.paths {
-            let (first, last) = (path.points_px[0], path.points_px[path.points_px.len() - 1]);
+        for path in &paths {
+            let (first, last) = (path[0], path[path.len() - 1]);
             assert!(
                 (first[1] < 105.0) == (last[1] < 105.0),
                 "{first:?} {last:?}"
             );
-            assert!(path.length_px > 380.0, "{}", path.length_px);
+            assert!(polyline_length(path) > 380.0, "{}", polyline_length(path));
         }
+    }
+
+    #[test]
+    fn two_cables_leaving_the_view_together_are_two_paths_to_the_border() {
+        let paths = paths_of(&[
+            (&[(20, 40), (80, 100), (399, 100)], 10),
+            (&[(20, 170), (80, 110), (399, 110)], 10),
+        ]);
+        assert_eq!(paths.len(), 2, "{paths:?}");
+        let mut middles: Vec<f64> = paths.iter().map(|path| middle_y(path)).collect();
+        middles.sort_by(f64::total_cmp);
+        assert!((middles[0] - 100.0).abs() < 1.5, "{middles:?}");
+        assert!((middles[1] - 110.0).abs() < 1.5, "{middles:?}");
+        for path in &paths {
+            assert!(path.iter().any(|p| p[0] > 385.0), "{path:?}");
+        }
+    }
+
+    #[test]
+    fn a_cable_at_the_border_with_a_thin_stroke_forked_off_it_is_not_split() {
+        // A 10 px cable to the border, and a 3 px stroke that meets it at
+        // a shallow angle: a fork at the run to the border, but the run is
+        // one cable wide.
+        let paths = paths_of(&[(&[(20, 105), (399, 105)], 10), (&[(20, 70), (150, 103)], 3)]);
+        let to_border = paths
+            .iter()
+            .filter(|path| path.iter().any(|p| p[0] > 385.0))
+            .count();
+        assert_eq!(to_border, 1, "{paths:?}");
     }
 
     #[test]
