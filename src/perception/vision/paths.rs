@@ -270,6 +270,13 @@ fn ends_alike(
     })
 }
 
+/// The middle of `values` (the upper one of an even count), sorted in
+/// place; `None` when empty.
+pub(super) fn median(values: &mut [f64]) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied()
+}
+
 /// The colour of a BGR image under `points` (pixel centres inside it), in
 /// OpenCV's 8-bit Lab: the per-channel median, which a glint or a speck
 /// of the background does not move. `None` for no points.

@@ -15,6 +15,7 @@ use super::config::MaskMethod;
 use super::config::VisionConfig;
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::mask::{self, BackgroundStats};
+use crate::perception::vision::paths::median;
 
 /// Lengths, in widths, from which a detection is long enough to be a
 /// cable rather than a scrap or a splash.
@@ -107,12 +108,14 @@ pub(super) fn confidence(
         .collect();
     // Not `<= 0.0`: a NaN width has no confidence either.
     let positive = |w: f64| w.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater);
-    if widths.is_empty() || typical_width_px.is_some_and(|w| !positive(w)) {
+    let Some(width) = median(&mut widths) else {
+        return 0.0;
+    };
+    if typical_width_px.is_some_and(|w| !positive(w)) {
         return 0.0;
     }
-    let width = median(&mut widths);
     let mut deviations: Vec<f64> = widths.iter().map(|w| (w - width).abs()).collect();
-    let spread = median(&mut deviations) / width;
+    let spread = median(&mut deviations).unwrap_or(0.0) / width;
     let long = (length_px / (CABLE_LENGTH_WIDTHS * width)).min(1.0);
     let even = 0.5_f64.powf((spread / WIDTH_SPREAD_HALF).powi(2));
     let like_others = typical_width_px.map_or(1.0, |typical| {
@@ -120,11 +123,6 @@ pub(super) fn confidence(
     });
     let believed = belief.map_or(1.0, |b| b.along(points_px));
     long * even * like_others * believed
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 #[cfg(test)]

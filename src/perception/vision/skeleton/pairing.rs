@@ -15,7 +15,7 @@ use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
 use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS, half_width_at};
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::mask::half_widths;
-use crate::perception::vision::paths::{delta_e, median_colour_lab, near_border};
+use crate::perception::vision::paths::{delta_e, median, median_colour_lab, near_border};
 
 /// Cost, in radians of bending, of leaving a branch unpaired at a junction
 /// (the cable ends there). Two branches are joined rather than both left
@@ -157,7 +157,7 @@ pub(super) struct SharedRun {
 /// longer than [`SPLIT_CROSSING_WIDTHS`]) thin into one run down the
 /// middle of the pair with such a fork where they part; paired as a
 /// junction, one cable would go on along the run and the other end at the
-/// fork. A run to the border must also be [`PAIR_WIDTHS`] as wide as the
+/// fork. A run to the border must also be [`PAIR_WIDTHS`] times as wide as the
 /// cables past its fork: a cable at the border with paint forked off it
 /// has the fork, not the width.
 pub(super) fn share_runs(
@@ -257,12 +257,6 @@ pub(super) fn share_runs(
         });
     }
     Ok(shared)
-}
-
-/// The middle of `values`, sorted in place; `None` when empty.
-fn median(values: &mut [f64]) -> Option<f64> {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied()
 }
 
 /// The pairings at the forks of a shared run: at the first fork, the
