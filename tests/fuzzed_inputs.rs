@@ -32,6 +32,24 @@ fn a_record_longer_than_the_file_ends_the_recording_there() {
     assert!(why.contains("exceeds limit"), "{why}");
 }
 
+/// `recording`: an uncompressed chunk whose record runs past the chunk's
+/// end made the mcap crate (0.26) subtract past zero in the chunk's
+/// remaining length: a panic where overflow checks are on (debug builds,
+/// the fuzz targets), a wrapped length and a file read as cut where they
+/// are off (release builds). Its overflow checks are now off in every
+/// profile (Cargo.toml), so the file reads as cut everywhere. The input as
+/// the fuzz target found it.
+#[test]
+fn a_chunk_whose_record_runs_past_its_end_ends_the_recording() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("corrupt.mcap");
+    let bytes: &[u8] = b"\x89\x4d\x43\x41\x50\x30\x0d\x0a\x06\x01\x17\x00\x00\x00\x00\x00\x00\x00\x00\xff\xff\xff\xe9\x00\x00\x00\x00\x4d\x43\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x02\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x4a\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00";
+    std::fs::write(&path, bytes).expect("write the file");
+    let recording = Recording::read(&path).expect("read as cut, not refused");
+    assert!(recording.messages.is_empty());
+    assert!(recording.truncated.is_some(), "the file is cut in the chunk");
+}
+
 /// `journal`: serde_json read some floats one unit in the last place off
 /// (0.21937721680296174, an angle's error as a trial entry holds it), so
 /// a resumed campaign's entries were not the ones it had written. Every
