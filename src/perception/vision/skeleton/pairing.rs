@@ -529,15 +529,26 @@ mod tests {
         found.paths.into_iter().map(|path| path.points_px).collect()
     }
 
-    /// The mean y of `path`'s points from x = 140 to 260.
-    fn middle_y(path: &[[f64; 2]]) -> f64 {
-        let along: Vec<f64> = path
+    /// Asserts that `paths` are two, one along each of two cables whose
+    /// centre lines run at y = 100 and 110 from x = 140 to 260, where the
+    /// skeleton of the pair runs down their middle.
+    fn assert_two_on_their_own_lines(paths: &[Vec<[f64; 2]>]) {
+        assert_eq!(paths.len(), 2, "{paths:?}");
+        let mut middles: Vec<f64> = paths
             .iter()
-            .filter(|p| (140.0..260.0).contains(&p[0]))
-            .map(|p| p[1])
+            .map(|path| {
+                let along: Vec<f64> = path
+                    .iter()
+                    .filter(|p| (140.0..260.0).contains(&p[0]))
+                    .map(|p| p[1])
+                    .collect();
+                assert!(!along.is_empty());
+                along.iter().sum::<f64>() / along.len() as f64
+            })
             .collect();
-        assert!(!along.is_empty());
-        along.iter().sum::<f64>() / along.len() as f64
+        middles.sort_by(f64::total_cmp);
+        assert!((middles[0] - 100.0).abs() < 1.5, "{middles:?}");
+        assert!((middles[1] - 110.0).abs() < 1.5, "{middles:?}");
     }
 
     #[test]
@@ -550,12 +561,7 @@ mod tests {
             (&[(20, 40), (80, 100), (320, 100), (380, 40)], 10),
             (&[(20, 170), (80, 110), (320, 110), (380, 170)], 10),
         ]);
-        assert_eq!(paths.len(), 2, "{paths:?}");
-        let mut middles: Vec<f64> = paths.iter().map(|path| middle_y(path)).collect();
-        middles.sort_by(f64::total_cmp);
-        // Each on its own cable's centre line, not the pair's middle.
-        assert!((middles[0] - 100.0).abs() < 1.5, "{middles:?}");
-        assert!((middles[1] - 110.0).abs() < 1.5, "{middles:?}");
+        assert_two_on_their_own_lines(&paths);
         // Each runs from its cable's one end to its other: from top left
         // to top right, or bottom left to bottom right.
         for path in &paths {
@@ -574,11 +580,7 @@ mod tests {
             (&[(20, 40), (80, 100), (399, 100)], 10),
             (&[(20, 170), (80, 110), (399, 110)], 10),
         ]);
-        assert_eq!(paths.len(), 2, "{paths:?}");
-        let mut middles: Vec<f64> = paths.iter().map(|path| middle_y(path)).collect();
-        middles.sort_by(f64::total_cmp);
-        assert!((middles[0] - 100.0).abs() < 1.5, "{middles:?}");
-        assert!((middles[1] - 110.0).abs() < 1.5, "{middles:?}");
+        assert_two_on_their_own_lines(&paths);
         for path in &paths {
             assert!(path.iter().any(|p| p[0] > 385.0), "{path:?}");
         }
