@@ -47,7 +47,10 @@ fn a_chunk_whose_record_runs_past_its_end_ends_the_recording() {
     std::fs::write(&path, bytes).expect("write the file");
     let recording = Recording::read(&path).expect("read as cut, not refused");
     assert!(recording.messages.is_empty());
-    assert!(recording.truncated.is_some(), "the file is cut in the chunk");
+    assert!(
+        recording.truncated.is_some(),
+        "the file is cut in the chunk"
+    );
 }
 
 /// `journal`: serde_json read some floats one unit in the last place off
