@@ -607,6 +607,14 @@ pub fn half_widths(mask: &Mat) -> Result<Mat, VisionError> {
     Ok(distance)
 }
 
+/// The mask's half width at `p` (`half_widths`: its distance transform);
+/// 0 outside it.
+pub fn half_width_at(half_widths: &Mat, p: [f64; 2]) -> f64 {
+    half_widths
+        .at_2d::<f32>(p[1].round() as i32, p[0].round() as i32)
+        .map_or(0.0, |h| f64::from(*h))
+}
+
 /// A CV_8U mask of `rows`×`cols` with every pixel 0.
 pub fn zeros_u8(rows: i32, cols: i32) -> Result<Mat, VisionError> {
     Mat::new_rows_cols_with_default(rows, cols, core::CV_8U, Scalar::all(0.0))

@@ -100,10 +100,9 @@ pub(super) fn confidence(
 ) -> f64 {
     let mut widths: Vec<f64> = points_px
         .iter()
-        .filter_map(|p| {
-            let (x, y) = (p[0].round() as i32, p[1].round() as i32);
-            let half = half_widths.at_2d::<f32>(y, x).ok()?;
-            (*half > 0.0).then(|| 2.0 * f64::from(*half))
+        .filter_map(|&p| {
+            let half = mask::half_width_at(half_widths, p);
+            (half > 0.0).then_some(2.0 * half)
         })
         .collect();
     // Not `<= 0.0`: a NaN width has no confidence either.

@@ -5,10 +5,10 @@
 use std::collections::HashSet;
 
 use opencv::core::Mat;
-use opencv::prelude::*;
 
 use super::direction::{bend_rad, direction_leaving};
 use super::thin::Grid;
+use crate::perception::vision::mask::half_width_at;
 use crate::perception::vision::paths::{polyline_length, unit};
 
 /// Junctions joined by an edge shorter than this many cable widths are one
@@ -447,14 +447,6 @@ impl Graph {
     ) -> [f64; 2] {
         direction_leaving(&self.outward(branch), centre, width_px)
     }
-}
-
-/// The mask's half width at `p` (`half_widths`: its distance transform);
-/// 0 outside it.
-pub(super) fn half_width_at(half_widths: &Mat, p: [f64; 2]) -> f64 {
-    half_widths
-        .at_2d::<f32>(p[1].round() as i32, p[0].round() as i32)
-        .map_or(0.0, |h| f64::from(*h))
 }
 
 #[cfg(test)]

@@ -12,9 +12,9 @@ use opencv::core::Mat;
 use opencv::prelude::*;
 
 use super::direction::{bend_rad, direction_stretch, tangent_at_centre};
-use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS, half_width_at};
+use super::graph::{Branch, Graph, NodeKind, SPLIT_CROSSING_WIDTHS};
 use crate::perception::vision::error::VisionError;
-use crate::perception::vision::mask::half_widths;
+use crate::perception::vision::mask::{half_width_at, half_widths};
 use crate::perception::vision::paths::{delta_e, median, median_colour_lab, near_border};
 
 /// Cost, in radians of bending, of leaving a branch unpaired at a junction
