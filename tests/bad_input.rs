@@ -241,8 +241,8 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
     );
     assert_cell_refused_at_its_line(
         "net_scale = 0.5",
-        "net_scale = 0.5\nbusy_net_scale = 0.0",
-        "busy_net_scale 0 is outside (0, 2]",
+        "net_scale = 0.5\nclose_net_scale = 0.0",
+        "close_net_scale 0 is outside (0, 2]",
     );
 }
 

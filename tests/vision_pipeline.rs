@@ -949,33 +949,35 @@ fn falling_off(image: &Mat) -> Mat {
 }
 
 /// Stands in for the segmentation network: the mask of the drawn cables.
-/// It keeps whether it was told each image's background was busy.
+/// It keeps whether it was told to look closer at each image.
 struct KnownMask {
     mask: Mat,
-    busy: Vec<bool>,
+    closer: Vec<bool>,
 }
 
 impl KnownMask {
     fn new(mask: Mat) -> Self {
         Self {
             mask,
-            busy: Vec::new(),
+            closer: Vec::new(),
         }
     }
 }
 
 impl MaskNetwork for KnownMask {
-    fn mask(&mut self, _bgr: &Mat, busy: bool) -> Result<Mat, VisionError> {
-        self.busy.push(busy);
+    fn mask(&mut self, _bgr: &Mat, closer: bool) -> Result<Mat, VisionError> {
+        self.closer.push(closer);
         Ok(self.mask.try_clone().expect("copy the known mask"))
     }
 }
 
-/// A red cable along `curve` drawn on `background`, found with a network
-/// that marks exactly it: what the pipeline made of it, and whether the
-/// network was told, each time it was asked, that the background is busy.
-fn by_known_network(
+/// A red cable along `curve` drawn on `background` (then `lit`), found
+/// with a network that marks exactly it: what the pipeline made of it,
+/// and whether the network was told, each time it was asked, to look
+/// closer.
+fn by_known_network_lit(
     background: Background,
+    lit: fn(&Mat) -> Mat,
     curve: &[[f64; 2]],
     config: VisionConfig,
 ) -> (VisionOutput, Vec<bool>) {
@@ -989,29 +991,80 @@ fn by_known_network(
     )
     .unwrap();
     let mut net = KnownMask::new(scene.union_mask.clone());
+    let config = VisionConfig {
+        mask: MaskMethod::Network,
+        ..config
+    };
     let out = Pipeline::new(config)
-        .detect(&scene.bgr, Some(&mut net))
+        .detect(&lit(&scene.bgr), Some(&mut net))
         .unwrap();
     assert_eq!(out.mask_used, MaskMethod::Network);
-    (out, net.busy)
+    (out, net.closer)
+}
+
+/// [`by_known_network_lit`] under an even light.
+fn by_known_network(
+    background: Background,
+    curve: &[[f64; 2]],
+    config: VisionConfig,
+) -> (VisionOutput, Vec<bool>) {
+    by_known_network_lit(background, |image| image.clone(), curve, config)
 }
 
 #[test]
-fn the_network_is_told_a_mosaic_is_busy_and_wood_is_not() {
+fn the_network_looks_closer_at_a_mosaic_and_dark_cloth_and_not_at_wood() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
     let mut seen = Vec::new();
-    for background in [Background::Mosaic, Background::Wood] {
-        let (out, busy) = by_known_network(background, &curve, keep_straight());
-        seen.push((out.background.near_fraction, busy));
+    for background in [
+        Background::Mosaic,
+        Background::Plain { bgr: [25; 3] },
+        Background::Wood,
+    ] {
+        let (out, closer) = by_known_network(background, &curve, keep_straight());
+        seen.push((out.background, closer));
     }
-    assert!(seen[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
-    assert!(seen[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{seen:?}");
+    let [mosaic, dark, wood] = &seen[..] else {
+        unreachable!()
+    };
+    assert!(mosaic.0.busy(), "{seen:?}");
+    assert!(!dark.0.busy() && !wood.0.busy(), "{seen:?}");
+    assert!(
+        wood.0.near_fraction >= mask::CLOSE_MAX_NEAR_FRACTION,
+        "{seen:?}"
+    );
+    assert!(
+        dark.0.background_lab[0] < mask::DARK_MAX_LIGHTNESS,
+        "{seen:?}"
+    );
+    assert!(
+        wood.0.background_lab[0] >= mask::DARK_MAX_LIGHTNESS,
+        "{seen:?}"
+    );
     assert_eq!(
         seen.iter()
-            .map(|(_, busy)| busy.clone())
+            .map(|(_, closer)| closer.clone())
             .collect::<Vec<_>>(),
-        [vec![true], vec![false]]
+        [vec![true], vec![true], vec![false]]
     );
+}
+
+#[test]
+fn a_gray_table_under_a_light_that_falls_off_is_looked_at_closer_but_not_taken_for_busy() {
+    let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+    let (out, closer) = by_known_network_lit(
+        Background::Plain { bgr: [210; 3] },
+        falling_off,
+        &curve,
+        VisionConfig::default(),
+    );
+    let near = out.background.near_fraction;
+    assert!(
+        (mask::BUSY_MAX_NEAR_FRACTION..mask::CLOSE_MAX_NEAR_FRACTION).contains(&near),
+        "{:?}",
+        out.background
+    );
+    assert!(!out.background.busy());
+    assert_eq!(closer, [true]);
 }
 
 #[test]

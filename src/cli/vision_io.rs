@@ -45,10 +45,11 @@ pub struct VisionArgs {
     #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
     pub net_scale: f64,
     /// The same on a busy background, few of its pixels near one colour
-    /// (paint, prints), where the network tells cables from strokes better
-    /// when it looks closer [default: 0.5, or --net-scale where larger]
+    /// (paint, prints), or a dark one, where the network tells cables from
+    /// strokes and tubes from dark cloth better when it looks closer
+    /// [default: 0.5, or --net-scale where larger]
     #[arg(long, value_parser = input_scale)]
-    pub busy_net_scale: Option<f64>,
+    pub close_net_scale: Option<f64>,
     /// Superpixel side in cable widths, for `--instances superpixels`
     /// (smaller: more superpixels).
     #[arg(long, default_value_t = DEFAULT_REGION_WIDTHS, value_parser = region_widths)]
@@ -172,7 +173,7 @@ impl VisionArgs {
         )
         .tuned(
             self.threshold,
-            InputScales::new(self.net_scale, self.busy_net_scale),
+            InputScales::new(self.net_scale, self.close_net_scale),
         )
     }
 }

@@ -53,8 +53,8 @@ fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error
     scale_in_range("net_scale", f64::deserialize(deserializer)?)
 }
 
-fn busy_net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<f64>, D::Error> {
-    scale_in_range("busy_net_scale", f64::deserialize(deserializer)?).map(Some)
+fn close_net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<f64>, D::Error> {
+    scale_in_range("close_net_scale", f64::deserialize(deserializer)?).map(Some)
 }
 
 fn scale_in_range<E: serde::de::Error>(field: &str, scale: f64) -> Result<f64, E> {
@@ -93,12 +93,12 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
-    /// The same on a busy background: paint, prints (default
-    /// [`crate::perception::vision::network::DEFAULT_BUSY_INPUT_SCALE`], or
+    /// The same on a busy background (paint, prints) or a dark one (default
+    /// [`crate::perception::vision::network::DEFAULT_CLOSE_INPUT_SCALE`], or
     /// `net_scale` where that is larger;
     /// see [`InputScales`]).
-    #[serde(default, deserialize_with = "busy_net_scale")]
-    pub busy_net_scale: Option<f64>,
+    #[serde(default, deserialize_with = "close_net_scale")]
+    pub close_net_scale: Option<f64>,
     /// Images are worked on at this width (px), shrunk or enlarged
     /// (default [`VisionConfig::work_width_px`]; 0: at their own size).
     #[serde(default = "default_work_width_px")]
@@ -160,7 +160,7 @@ impl VisionDetectorConfig {
         )
         .tuned(
             DEFAULT_THRESHOLD,
-            InputScales::new(self.net_scale, self.busy_net_scale),
+            InputScales::new(self.net_scale, self.close_net_scale),
         )
     }
 

@@ -50,7 +50,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
         let mut args = base.clone();
         change(&mut args);
-        args.busy_net_scale = Some(args.net_scale);
+        args.close_net_scale = Some(args.net_scale);
         args
     };
     let mut settings = vec![(

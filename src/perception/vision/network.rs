@@ -43,30 +43,32 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// (README, the sweep table).
 pub const DEFAULT_INPUT_SCALE: f64 = 0.375;
 
-/// The network's input side over the image's on a busy background (see
-/// [`InputScales`]), unless set otherwise.
-pub const DEFAULT_BUSY_INPUT_SCALE: f64 = 0.5;
+/// The network's input side over the image's on a busy or dark background
+/// (see [`InputScales`]), unless set otherwise.
+pub const DEFAULT_CLOSE_INPUT_SCALE: f64 = 0.5;
 
-/// The network's input scales: `normal`, and `busy` for an image whose
-/// background is busy (few of its pixels near one colour: paint, prints;
-/// [`crate::perception::vision::mask::BUSY_MAX_NEAR_FRACTION`]). There the
-/// network tells a cable from paint strokes of its colour better when it
-/// looks closer; elsewhere the smaller scale is faster and as good
-/// (docs/vision-record.md, "Busy scenes: the paper's kind").
+/// The network's input scales: `normal`, and `close` for an image whose
+/// background is far from one colour (paint, prints) or dark
+/// ([`crate::perception::vision::mask::BackgroundStats::closer_look`]). There the
+/// network tells a cable from paint strokes of its colour, and a tube from
+/// dark cloth, better when it looks closer; on the photographs' bright
+/// cloth, wood and paper the smaller scale is faster and counts as many
+/// right (docs/vision-record.md, "Busy scenes: the paper's kind" and
+/// "Closer on dark backgrounds too").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InputScales {
     pub normal: f64,
-    pub busy: f64,
+    pub close: f64,
 }
 
 impl InputScales {
-    /// `normal`, and `busy` when given, else [`DEFAULT_BUSY_INPUT_SCALE`]
-    /// or `normal` where that is larger: a busy scene is never looked at
-    /// less closely than a plain one.
-    pub fn new(normal: f64, busy: Option<f64>) -> Self {
+    /// `normal`, and `close` when given, else [`DEFAULT_CLOSE_INPUT_SCALE`]
+    /// or `normal` where that is larger: a busy or dark scene is never
+    /// looked at less closely than another.
+    pub fn new(normal: f64, close: Option<f64>) -> Self {
         Self {
             normal,
-            busy: busy.unwrap_or(DEFAULT_BUSY_INPUT_SCALE.max(normal)),
+            close: close.unwrap_or(DEFAULT_CLOSE_INPUT_SCALE.max(normal)),
         }
     }
 
@@ -74,7 +76,7 @@ impl InputScales {
     pub fn fixed(scale: f64) -> Self {
         Self {
             normal: scale,
-            busy: scale,
+            close: scale,
         }
     }
 }
@@ -593,11 +595,11 @@ impl LazyNetwork {
 }
 
 impl MaskNetwork for LazyNetwork {
-    fn mask(&mut self, bgr: &Mat, busy: bool) -> Result<Mat, VisionError> {
+    fn mask(&mut self, bgr: &Mat, closer: bool) -> Result<Mat, VisionError> {
         let scales = self.input_scales;
         let net = self.load()?;
-        net.input_scale = if busy { scales.busy } else { scales.normal };
-        MaskNetwork::mask(net, bgr, busy)
+        net.input_scale = if closer { scales.close } else { scales.normal };
+        MaskNetwork::mask(net, bgr, closer)
     }
 
     fn threshold(&self) -> f64 {
@@ -609,8 +611,8 @@ impl MaskNetwork for LazyNetwork {
 /// pipeline cuts at [`SegmentationNet::threshold`] and which weigh each
 /// detection's confidence.
 impl MaskNetwork for SegmentationNet {
-    /// At its one [`SegmentationNet::input_scale`], busy or not.
-    fn mask(&mut self, bgr: &Mat, _busy: bool) -> Result<Mat, VisionError> {
+    /// At its one [`SegmentationNet::input_scale`], closer or not.
+    fn mask(&mut self, bgr: &Mat, _closer: bool) -> Result<Mat, VisionError> {
         self.probability(bgr)
             .map_err(|source| VisionError::Network { source })
     }

@@ -18,10 +18,11 @@ pub trait MaskNetwork {
     /// The cables' mask for a BGR 8-bit image: one channel, the image's size
     /// (or any size: it is resized), 8-bit 0/255 (or 0/1) or 32-bit float
     /// probabilities. Probabilities also tell each detection's confidence
-    /// how sure the network was of it. `busy`: the image's background is
-    /// busy ([`mask::BUSY_MAX_NEAR_FRACTION`]), where a network may look
+    /// how sure the network was of it. `closer`: the image's background is
+    /// far from one colour or dark
+    /// ([`mask::BackgroundStats::closer_look`]), where a network may look
     /// closer.
-    fn mask(&mut self, bgr: &Mat, busy: bool) -> Result<Mat, VisionError>;
+    fn mask(&mut self, bgr: &Mat, closer: bool) -> Result<Mat, VisionError>;
 
     /// The probability above which a pixel is cable, for a network that
     /// gives probabilities.
@@ -62,9 +63,9 @@ pub(super) fn choose_mask(
     notes: &mut Vec<String>,
 ) -> Result<MaskChoice, VisionError> {
     let background = mask::background_stats(work)?;
-    let busy = background.busy();
+    let closer = background.closer_look();
     let network_mask =
-        |net: &mut dyn MaskNetwork| network_mask(net, work, view, busy, min_blob_area_px);
+        |net: &mut dyn MaskNetwork| network_mask(net, work, view, closer, min_blob_area_px);
     let (found, used, background) = match (method, network) {
         (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
         (MaskMethod::Network, Some(net)) => (network_mask(net)?, MaskMethod::Network, background),
@@ -111,22 +112,22 @@ pub(super) fn choose_mask(
     })
 }
 
-/// The network's mask of `work` (seen within `view` when given; `busy`:
-/// its background is busy), binarized to its size and cleaned of blobs
+/// The network's mask of `work` (seen within `view` when given; `closer`:
+/// its background is far from one colour or dark), binarized to its size and cleaned of blobs
 /// smaller than `min_blob_area_px`, with its probabilities if it gave
 /// them.
 fn network_mask(
     net: &mut dyn MaskNetwork,
     work: &Mat,
     view: Option<&NetworkView>,
-    busy: bool,
+    closer: bool,
     min_blob_area_px: f64,
 ) -> Result<(Mat, Option<Belief>), VisionError> {
     let raw = match view {
-        None => net.mask(work, busy)?,
+        None => net.mask(work, closer)?,
         Some(view) => {
             let size = view.image.size().map_err(cv("image size"))?;
-            let seen = mask::at_size(net.mask(&view.image, busy)?, size)?;
+            let seen = mask::at_size(net.mask(&view.image, closer)?, size)?;
             Mat::roi(&seen, view.region)
                 .and_then(|region| region.try_clone())
                 .map_err(cv("cut the region of interest from the network's view"))?
