@@ -200,9 +200,9 @@ impl VisionSetting {
 pub const DEFAULT_SETTING: &str = "cablecell's default";
 
 /// The settings compared on every image set: the classical mask, the
-/// network at three input sizes (busy backgrounds too), cablecell's
-/// default (the network at its default sizes, larger on a busy or dark
-/// background), and the paper's superpixels for the instances. Each
+/// network at three input sizes (varied and dark backgrounds too), cablecell's
+/// default (the network at its default sizes, larger on a varied or
+/// dark background), and the paper's superpixels for the instances. Each
 /// draws the cables' masks, which scoring needs (their stage is timed
 /// but left out of the total: the cell's detector skips it).
 pub fn vision_settings() -> Vec<VisionSetting> {
@@ -225,7 +225,7 @@ pub fn vision_settings() -> Vec<VisionSetting> {
     settings.push(VisionSetting::new(
         "mask",
         format!(
-            "{DEFAULT_SETTING}: {}, {}× on a busy or dark background, skeleton",
+            "{DEFAULT_SETTING}: {}, {}× on a varied or dark background, skeleton",
             network(defaults.normal),
             defaults.close
         ),

@@ -45,7 +45,7 @@ struct SweepRow {
 /// size, the shipped 8-bit network or the float one it came from, the
 /// instance method and the superpixels' size, each varied from
 /// the command line's settings. Each row names the network's one input
-/// size, so it runs at that size on busy backgrounds too.
+/// size, so it runs at that size on varied and dark backgrounds too.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
         let mut args = base.clone();

@@ -43,7 +43,7 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// (README, the sweep table).
 pub const DEFAULT_INPUT_SCALE: f64 = 0.375;
 
-/// The network's input side over the image's on a busy or dark background
+/// The network's input side over the image's on a varied or dark background
 /// (see [`InputScales`]), unless set otherwise.
 pub const DEFAULT_CLOSE_INPUT_SCALE: f64 = 0.5;
 
