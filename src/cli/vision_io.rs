@@ -44,10 +44,10 @@ pub struct VisionArgs {
     /// for 640×480; smaller is faster).
     #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
     pub net_scale: f64,
-    /// The same on a busy background, few of its pixels near one colour
-    /// (paint, prints), or a dark one, where the network tells cables from
-    /// strokes and tubes from dark cloth better when it looks closer
-    /// [default: 0.5, or --net-scale where larger]
+    /// The same where less than half of the image is near its median
+    /// colour (paint, prints, mosaics) or the background is dark, where the
+    /// network tells cables from strokes and tubes from dark cloth better
+    /// when it looks closer [default: 0.5, or --net-scale where larger]
     #[arg(long, value_parser = input_scale)]
     pub close_net_scale: Option<f64>,
     /// Superpixel side in cable widths, for `--instances superpixels`

@@ -93,7 +93,8 @@ pub struct VisionDetectorConfig {
     /// cables in a small region whole.
     #[serde(default = "default_net_scale", deserialize_with = "net_scale")]
     pub net_scale: f64,
-    /// The same on a busy background (paint, prints) or a dark one (default
+    /// The same where the background is far from one colour (paint,
+    /// prints) or dark (default
     /// [`crate::perception::vision::network::DEFAULT_CLOSE_INPUT_SCALE`], or
     /// `net_scale` where that is larger;
     /// see [`InputScales`]).

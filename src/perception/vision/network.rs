@@ -63,8 +63,8 @@ pub struct InputScales {
 
 impl InputScales {
     /// `normal`, and `close` when given, else [`DEFAULT_CLOSE_INPUT_SCALE`]
-    /// or `normal` where that is larger: a busy or dark scene is never
-    /// looked at less closely than another.
+    /// or `normal` where that is larger: such a scene is never looked at
+    /// less closely than another.
     pub fn new(normal: f64, close: Option<f64>) -> Self {
         Self {
             normal,
