@@ -53,6 +53,33 @@ fn a_chunk_whose_record_runs_past_its_end_ends_the_recording() {
     );
 }
 
+/// `recording`: an attachment record too short for its own length field
+/// made the mcap crate (0.26) cut its body from byte 32 to byte 28: a
+/// panic in every build, found by the fuzz target. A recording holds no
+/// attachments, and the reader now passes them over unparsed.
+#[test]
+fn an_attachment_shorter_than_its_header_is_passed_over() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("corrupt.mcap");
+    let mut bytes = b"\x89MCAP0\r\n".to_vec();
+    // The header record: an empty profile and library name.
+    bytes.push(0x01);
+    bytes.extend(8_u64.to_le_bytes());
+    bytes.extend([0; 8]);
+    // An attachment: two times, an empty name and media type, a data
+    // length of 0, and no data or CRC after them.
+    bytes.push(0x09);
+    bytes.extend(32_u64.to_le_bytes());
+    bytes.extend([0; 32]);
+    std::fs::write(&path, &bytes).expect("write the file");
+    let recording = Recording::read(&path).expect("read as cut, not refused");
+    assert!(recording.messages.is_empty());
+    assert!(
+        recording.truncated.is_some(),
+        "the file ends without its summary"
+    );
+}
+
 /// `journal`: serde_json read some floats one unit in the last place off
 /// (0.21937721680296174, an angle's error as a trial entry holds it), so
 /// a resumed campaign's entries were not the ones it had written. Every
