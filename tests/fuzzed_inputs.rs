@@ -8,23 +8,35 @@ use cablecell::recording::Recording;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// An MCAP file's magic and header record (an empty profile and library
+/// name), for the records after it.
+fn mcap_start() -> Vec<u8> {
+    let mut bytes = b"\x89MCAP0\r\n".to_vec();
+    bytes.push(0x01);
+    bytes.extend(8_u64.to_le_bytes());
+    bytes.extend([0; 8]);
+    bytes
+}
+
+/// `bytes` written to a file and read back as a recording, which must
+/// succeed (a corrupt file reads as cut).
+fn read_as_cut(bytes: &[u8]) -> Recording {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("corrupt.mcap");
+    std::fs::write(&path, bytes).expect("write the file");
+    Recording::read(&path).expect("read as cut, not refused")
+}
+
 /// `recording`: a record claiming 2^64 - 1 bytes overflowed inside the
 /// mcap crate, a panic of `cablecell replay`. The recording now ends there,
 /// cut, like a file whose run was killed.
 #[test]
 fn a_record_longer_than_the_file_ends_the_recording_there() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("corrupt.mcap");
-    let mut bytes = b"\x89MCAP0\r\n".to_vec();
-    // The header record: an empty profile and library name.
-    bytes.push(0x01);
-    bytes.extend(8_u64.to_le_bytes());
-    bytes.extend([0; 8]);
+    let mut bytes = mcap_start();
     // A record of an unknown kind, as long as a length can say.
     bytes.push(0xFF);
     bytes.extend(u64::MAX.to_le_bytes());
-    std::fs::write(&path, &bytes).expect("write the file");
-    let recording = Recording::read(&path).expect("read as cut, not refused");
+    let recording = read_as_cut(&bytes);
     assert!(recording.messages.is_empty());
     let why = recording
         .truncated
@@ -41,11 +53,8 @@ fn a_record_longer_than_the_file_ends_the_recording_there() {
 /// the fuzz target found it.
 #[test]
 fn a_chunk_whose_record_runs_past_its_end_ends_the_recording() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("corrupt.mcap");
     let bytes: &[u8] = b"\x89\x4d\x43\x41\x50\x30\x0d\x0a\x06\x01\x17\x00\x00\x00\x00\x00\x00\x00\x00\xff\xff\xff\xe9\x00\x00\x00\x00\x4d\x43\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x02\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x4a\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00";
-    std::fs::write(&path, bytes).expect("write the file");
-    let recording = Recording::read(&path).expect("read as cut, not refused");
+    let recording = read_as_cut(bytes);
     assert!(recording.messages.is_empty());
     assert!(
         recording.truncated.is_some(),
@@ -59,20 +68,13 @@ fn a_chunk_whose_record_runs_past_its_end_ends_the_recording() {
 /// attachments, and the reader now passes them over unparsed.
 #[test]
 fn an_attachment_shorter_than_its_header_is_passed_over() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("corrupt.mcap");
-    let mut bytes = b"\x89MCAP0\r\n".to_vec();
-    // The header record: an empty profile and library name.
-    bytes.push(0x01);
-    bytes.extend(8_u64.to_le_bytes());
-    bytes.extend([0; 8]);
+    let mut bytes = mcap_start();
     // An attachment: two times, an empty name and media type, a data
     // length of 0, and no data or CRC after them.
     bytes.push(0x09);
     bytes.extend(32_u64.to_le_bytes());
     bytes.extend([0; 32]);
-    std::fs::write(&path, &bytes).expect("write the file");
-    let recording = Recording::read(&path).expect("read as cut, not refused");
+    let recording = read_as_cut(&bytes);
     assert!(recording.messages.is_empty());
     assert!(
         recording.truncated.is_some(),
