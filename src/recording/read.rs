@@ -1,6 +1,7 @@
 //! Reads a recording back, whole or cut short.
 
 use std::collections::HashMap;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 use mcap::records::{Record, op};
@@ -30,6 +31,47 @@ pub struct RecordedMessage {
     pub data: Vec<u8>,
 }
 
+/// Takes one record of a recording's data section: a channel into
+/// `topics`, a message into `messages`. Breaks at the data's end (the
+/// summary after it repeats the channels), or with why the file reads as
+/// cut from here.
+fn take_record(
+    opcode: u8,
+    data: &[u8],
+    topics: &mut HashMap<u16, String>,
+    messages: &mut Vec<RecordedMessage>,
+) -> ControlFlow<Option<String>> {
+    match opcode {
+        op::DATA_END => return ControlFlow::Break(None),
+        // mcap 0.26 cuts an attachment's body before it checks the body's
+        // length (a panic on a corrupt one, found by fuzzing); a recording
+        // holds none.
+        op::ATTACHMENT => return ControlFlow::Continue(()),
+        _ => {}
+    }
+    match mcap::parse_record(opcode, data) {
+        Ok(Record::Channel(channel)) => {
+            topics.insert(channel.id, channel.topic);
+        }
+        Ok(Record::Message { header, data }) => {
+            let Some(topic) = topics.get(&header.channel_id) else {
+                return ControlFlow::Break(Some(format!(
+                    "message {} is on channel {}, which no channel record names",
+                    header.sequence, header.channel_id
+                )));
+            };
+            messages.push(RecordedMessage {
+                topic: topic.clone(),
+                log_time_ns: header.log_time,
+                data: data.into_owned(),
+            });
+        }
+        Ok(_) => {}
+        Err(error) => return ControlFlow::Break(Some(error.to_string())),
+    }
+    ControlFlow::Continue(())
+}
+
 impl Recording {
     pub fn read(path: &Path) -> Result<Self, RecordingError> {
         let bytes = std::fs::read(path).map_err(|source| RecordingError::Io {
@@ -37,7 +79,7 @@ impl Recording {
             source,
         })?;
         let complete = mcap::read::footer(&bytes).is_ok();
-        // `mcap::MessageStream` sets no limit on a record's length, and a
+        // mcap's readers set no limit on a record's length by default, and a
         // corrupt length near 2^64 overflows inside the mcap crate (a
         // panic, found by fuzzing): no record is longer than the file, or
         // than a message in a chunk decompressed from it can be (a camera
@@ -52,55 +94,22 @@ impl Recording {
         let mut messages = Vec::new();
         let mut truncated = None;
         while let Some(event) = reader.next_event() {
-            match event {
+            let flow = match event {
                 Ok(LinearReadEvent::ReadRequest(wanted)) => {
                     let n = wanted.min(unread.len());
                     reader.insert(n).copy_from_slice(&unread[..n]);
                     reader.notify_read(n);
                     unread = &unread[n..];
+                    continue;
                 }
-                // The summary after it repeats the channels.
-                Ok(LinearReadEvent::Record {
-                    opcode: op::DATA_END,
-                    ..
-                }) => break,
-                // mcap 0.26 cuts an attachment's body before it checks the
-                // body's length (a panic on a corrupt one, found by
-                // fuzzing); a recording holds none.
-                Ok(LinearReadEvent::Record {
-                    opcode: op::ATTACHMENT,
-                    ..
-                }) => {}
                 Ok(LinearReadEvent::Record { opcode, data }) => {
-                    match mcap::parse_record(opcode, data) {
-                        Ok(Record::Channel(channel)) => {
-                            topics.insert(channel.id, channel.topic);
-                        }
-                        Ok(Record::Message { header, data }) => {
-                            let Some(topic) = topics.get(&header.channel_id) else {
-                                truncated = Some(format!(
-                                    "message {} is on channel {}, which no channel record names",
-                                    header.sequence, header.channel_id
-                                ));
-                                break;
-                            };
-                            messages.push(RecordedMessage {
-                                topic: topic.clone(),
-                                log_time_ns: header.log_time,
-                                data: data.into_owned(),
-                            });
-                        }
-                        Ok(_) => {}
-                        Err(error) => {
-                            truncated = Some(error.to_string());
-                            break;
-                        }
-                    }
+                    take_record(opcode, data, &mut topics, &mut messages)
                 }
-                Err(error) => {
-                    truncated = Some(error.to_string());
-                    break;
-                }
+                Err(error) => ControlFlow::Break(Some(error.to_string())),
+            };
+            if let ControlFlow::Break(why) = flow {
+                truncated = why;
+                break;
             }
         }
         if truncated.is_none() && !complete {

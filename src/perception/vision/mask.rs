@@ -67,18 +67,16 @@ pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 
 /// The network looks closer at a background with less than this fraction
-/// near its median colour: busy ones, and the many paint, print and mosaic
-/// scenes with broad patches of one colour that score from 0.4 up to it.
-/// The photographs of cables on wood, cloth and paper score 0.52 and up;
-/// a plain table under a light that falls off to half at its corners
-/// scores about 0.45, and is looked at closer but not taken for busy
-/// (docs/vision-record.md, "Closer on dark backgrounds too").
+/// near its median colour: busy ones, and paint, print and mosaic scenes
+/// with broad patches of one colour. It lies under what photographs of
+/// cables on wood, cloth and paper score, where looking closer gains
+/// nothing and costs time (docs/vision-record.md, "Closer on dark
+/// backgrounds too").
 pub const CLOSE_MAX_NEAR_FRACTION: f64 = 0.5;
 
 /// A background whose median lightness (8-bit CIELAB, L·255/100) is under
-/// this is dark: black cloth, a dark table (L* under 40). The rendered
-/// dark scenes' backgrounds lie at 79 and under, the photographs' bright
-/// cloth, wood and paper at 209 and over.
+/// this is dark: black cloth, a dark table (L* under 40), where the
+/// network tells a tube from the cloth better when it looks closer.
 pub const DARK_MAX_LIGHTNESS: f64 = 102.0;
 
 /// Side, in pixels of the image shrunk by [`LOCAL_BACKGROUND_DOWNSCALE`],

@@ -113,9 +113,9 @@ pub(super) fn choose_mask(
 }
 
 /// The network's mask of `work` (seen within `view` when given; `closer`:
-/// its background is far from one colour or dark), binarized to its size and cleaned of blobs
-/// smaller than `min_blob_area_px`, with its probabilities if it gave
-/// them.
+/// its background is far from one colour or dark), binarized to its size
+/// and cleaned of blobs smaller than `min_blob_area_px`, with its
+/// probabilities if it gave them.
 fn network_mask(
     net: &mut dyn MaskNetwork,
     work: &Mat,
