@@ -40,6 +40,7 @@ Run (from the project's root):
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import random
@@ -360,10 +361,10 @@ def centre_lines(target: torch.Tensor) -> torch.Tensor:
     """The labelled masks' centre lines: the ridges of their distance
     transforms (OpenCV, a fraction of the soft skeleton's time)."""
     lines = np.zeros(target.shape, np.float32)
-    for i, m in enumerate(target[:, 0].numpy().astype(np.uint8)):
+    for i, m in enumerate(target[:, 0].cpu().numpy().astype(np.uint8)):
         dist = cv2.distanceTransform(m, cv2.DIST_L2, 3)
         lines[i, 0] = (dist >= cv2.dilate(dist, np.ones((3, 3), np.uint8))) & (m > 0)
-    return torch.from_numpy(lines)
+    return torch.from_numpy(lines).to(target.device)
 
 
 def cl_dice(p: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
@@ -382,7 +383,7 @@ def cl_dice(p: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
 def crop_losses(logits: torch.Tensor, target: torch.Tensor, cl_dice_weight: float = 0.0) -> torch.Tensor:
     """Each crop's loss: weighted cross-entropy plus soft DICE (plus clDice
     at `cl_dice_weight`)."""
-    bce = F.binary_cross_entropy_with_logits(logits, target, pos_weight=torch.tensor(2.0),
+    bce = F.binary_cross_entropy_with_logits(logits, target, pos_weight=logits.new_tensor(2.0),
                                              reduction="none").mean(dim=(1, 2, 3))
     p = torch.sigmoid(logits)
     inter = (p * target).sum(dim=(1, 2, 3))
@@ -408,7 +409,8 @@ def as_batch(crops: list[tuple[np.ndarray, np.ndarray]]) -> tuple[torch.Tensor, 
 def hardest(model: "CableNet", candidates: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
     """The candidate crop the network now does worst on (its loss, without
     a gradient): where paint looks like cable, or a cable like paint."""
-    x, y = as_batch(candidates)
+    device = next(model.parameters()).device
+    x, y = (t.to(device) for t in as_batch(candidates))
     with torch.no_grad():
         losses = crop_losses(model.logits(x), y)
     return candidates[int(losses.argmax())]
@@ -439,6 +441,24 @@ def make_batch(rng, real, synth, busy, cutouts, args, model):
             candidates.append(augment(rng, img, m, args.crop, tuple(args.scales)))
         crops.append(candidates[0] if len(candidates) == 1 else hardest(model, candidates))
     return as_batch(crops)
+
+
+class BatchStream(torch.utils.data.IterableDataset):
+    """Endless batches from `make_batch`, made in worker processes
+    (`--workers`) so that a GPU is not kept waiting on one CPU core. Each
+    worker draws from its own generator, seeded by the run's seed, the step
+    the run starts (or resumes) at and the worker's number: a run is the
+    same again for the same number of workers."""
+
+    def __init__(self, data, args, first_step: int):
+        super().__init__()
+        self.data, self.args, self.first_step = data, args, first_step
+
+    def __iter__(self):
+        info = torch.utils.data.get_worker_info()
+        rng = np.random.default_rng([self.args.seed, self.first_step, info.id if info else 0])
+        while True:
+            yield make_batch(rng, *self.data, self.args, None)
 
 
 def load_onnx_weights(model: CableNet, path: Path) -> None:
@@ -527,7 +547,8 @@ def train(args) -> CableNet:
     elif args.init is not None:
         load_onnx_weights(model, args.init)
         print(f"starting from {args.init}'s weights", flush=True)
-    model = model.to(memory_format=torch.channels_last)
+    device = torch.device(args.device)
+    model = model.to(device=device, memory_format=torch.channels_last)
     n_params = sum(p.numel() for p in model.parameters())
     print(f"model: {n_params} parameters", flush=True)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
@@ -535,7 +556,7 @@ def train(args) -> CableNet:
     checkpoint = args.out.with_name(f"{args.out.stem}.checkpoint.pt")
     first = 1
     if args.resume and checkpoint.exists():
-        state = torch.load(checkpoint, weights_only=False)
+        state = torch.load(checkpoint, weights_only=False, map_location=device)
         model.load_state_dict(state["model"])
         opt.load_state_dict(state["opt"])
         sched.load_state_dict(state["sched"])
@@ -546,10 +567,16 @@ def train(args) -> CableNet:
     model.train()
     if args.init is not None:
         freeze_batch_norms(model)
+    if args.workers > 0:
+        batches = iter(torch.utils.data.DataLoader(
+            BatchStream((real, synth, busy, cutouts), args, first), batch_size=None,
+            num_workers=args.workers, prefetch_factor=4, pin_memory=device.type == "cuda"))
+    else:
+        batches = (make_batch(rng, real, synth, busy, cutouts, args, model) for _ in itertools.count())
     t_train = time.time()
     running = 0.0
     for step in range(first, args.steps + 1):
-        x, y = make_batch(rng, real, synth, busy, cutouts, args, model)
+        x, y = (t.to(device, non_blocking=True) for t in next(batches))
         loss = loss_fn(model.logits(x), y, args.cl_dice_weight)
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -566,7 +593,7 @@ def train(args) -> CableNet:
                        checkpoint)
     model.eval()
     print(f"training took {time.time() - t_train:.0f} s", flush=True)
-    return model.to(memory_format=torch.contiguous_format)
+    return model.to(device="cpu", memory_format=torch.contiguous_format)
 
 
 # --------------------------------------------------------------------------
@@ -706,6 +733,12 @@ def main() -> int:
                         help="each busy crop is the hardest of this many for the network as it trains "
                              "(models/README.md, \"Hard busy crops\"; the shipped model does not use it)")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--device", default="cpu",
+                        help="where the network trains: cpu, or cuda on a machine with an NVIDIA GPU "
+                             "(models/README.md, \"Training on a GPU\")")
+    parser.add_argument("--workers", type=int, default=0,
+                        help="processes that make the batches beside the training (0: the training process "
+                             "itself, as for every network shipped so far); a GPU needs many")
     parser.add_argument("--eval-only", action="store_true", help="measure existing models")
     args = parser.parse_args()
 
@@ -714,6 +747,12 @@ def main() -> int:
     seed_everything(args.seed)
     if not args.data.is_dir():
         print(f"no data at {args.data}", file=sys.stderr)
+        return 2
+    if args.device.startswith("cuda") and not torch.cuda.is_available():
+        print(f"--device {args.device}: PyTorch sees no GPU here", file=sys.stderr)
+        return 2
+    if args.workers > 0 and args.hard_of > 1:
+        print("--hard-of picks crops with the network as it trains: it needs --workers 0", file=sys.stderr)
         return 2
     float_out = args.out.with_name(f"{args.out.stem}_float.onnx")
     if not args.eval_only and (args.synthetic is None or not all(f.is_dir() for f in args.synthetic)):
