@@ -733,9 +733,7 @@ def main() -> int:
                         help="each busy crop is the hardest of this many for the network as it trains "
                              "(models/README.md, \"Hard busy crops\"; the shipped model does not use it)")
     parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--device", default="cpu",
-                        help="where the network trains: cpu, or cuda on a machine with an NVIDIA GPU "
-                             "(models/README.md, \"Training on a GPU\")")
+    parser.add_argument("--device", default="cpu", help="cpu, or cuda (models/README.md, \"Training on a GPU\")")
     parser.add_argument("--workers", type=int, default=0,
                         help="processes that make the batches beside the training (0: the training process "
                              "itself, as for every network shipped so far); a GPU needs many")
