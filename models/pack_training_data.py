@@ -4,12 +4,12 @@ carried to a GPU machine (models/README.md, "Training on a GPU"): the
 cables-dev folder as it is, and the first COUNT images of each rendered
 folder at the size the training reads them at (the network's, 320 x 240),
 as JPEG with their union masks. A rendered busy scene shrinks from about
-110 KiB to about 27 KiB. The training script reads the packed folders as
+110 KiB to about 24 KiB with its mask. The training script reads the packed folders as
 it reads the rendered ones.
 
 Run (from the project's root):
     .venv-train/bin/python models/pack_training_data.py --out target/gpu-pack \\
-        target/render-train:800 target/render-busy4:1200 ...
+        target/render-train:600 target/render-busy4:700 ...
 """
 
 from __future__ import annotations
@@ -22,30 +22,25 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from train_segmentation import NET_H, NET_W
+from train_segmentation import load_synthetic
 
 JPEG_QUALITY = 85
 
 
 def pack_folder(source: Path, out: Path, count: int) -> int:
-    """The first `count` images of a rendered folder into `out`, shrunk;
-    returns the bytes written."""
-    stems = sorted(p.stem for p in source.glob("*.jpg"))[:count]
-    if len(stems) < count:
-        raise FileNotFoundError(f"{source}: {len(stems)} rendered images, {count} asked for")
+    """The first `count` images of a rendered folder into `out`, as the
+    training reads them; returns the bytes written."""
+    images, masks = load_synthetic(source, count)
+    if len(images) < count:
+        raise FileNotFoundError(f"{source}: {len(images)} rendered images, {count} asked for")
     out.mkdir(parents=True, exist_ok=True)
     written = 0
-    for stem in stems:
-        img = cv2.imread(str(source / f"{stem}.jpg"), cv2.IMREAD_COLOR)
-        mask = cv2.imread(str(source / f"{stem}_mask_all.png"), cv2.IMREAD_GRAYSCALE)
-        if img is None or mask is None:
-            raise FileNotFoundError(f"{source}: image or mask {stem} missing")
-        img = cv2.resize(img, (NET_W, NET_H), interpolation=cv2.INTER_AREA)
+    for i, (img, mask) in enumerate(zip(images, masks)):
+        jpg, png = out / f"{i:05d}.jpg", out / f"{i:05d}_mask_all.png"
+        cv2.imwrite(str(jpg), img, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
         # The training thresholds its targets at half anyway.
-        mask = cv2.resize((mask > 127).astype(np.float32), (NET_W, NET_H), interpolation=cv2.INTER_AREA)
-        cv2.imwrite(str(out / f"{stem}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
-        cv2.imwrite(str(out / f"{stem}_mask_all.png"), (mask > 0.5).astype(np.uint8) * 255)
-        written += (out / f"{stem}.jpg").stat().st_size + (out / f"{stem}_mask_all.png").stat().st_size
+        cv2.imwrite(str(png), (mask > 0.5).astype(np.uint8) * 255)
+        written += jpg.stat().st_size + png.stat().st_size
     return written
 
 
