@@ -4,8 +4,8 @@ carried to a GPU machine (models/README.md, "Training on a GPU"): the
 cables-dev folder as it is, and the first COUNT images of each rendered
 folder at the size the training reads them at (the network's, 320 x 240),
 as JPEG with their union masks. A rendered busy scene shrinks from about
-110 KiB to about 24 KiB with its mask. The training script reads the packed folders as
-it reads the rendered ones.
+110 KiB to about 24 KiB with its mask. The training script reads the
+packed folders as it reads the rendered ones.
 
 Run (from the project's root):
     .venv-train/bin/python models/pack_training_data.py --out target/gpu-pack \\
