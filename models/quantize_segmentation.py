@@ -51,6 +51,9 @@ def bytes_in(path: Path) -> None:
     model = onnx.load(path)
     graph = model.graph
     values = {i.name: i for i in graph.initializer}
+    # Some ONNX Runtime versions keep the exporter's Constant nodes.
+    values.update({node.output[0]: attr.t for node in graph.node if node.op_type == "Constant"
+                   for attr in node.attribute if attr.name == "value"})
     array = lambda name: numpy_helper.to_array(values[name]).astype(np.float64)
     producer = {out: node for node in graph.node for out in node.output}
 

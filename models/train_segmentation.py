@@ -554,6 +554,8 @@ def train(args) -> CableNet:
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=args.steps, pct_start=0.1)
     checkpoint = args.out.with_name(f"{args.out.stem}.checkpoint.pt")
+    # Made now, so that a run is not lost at its first checkpoint.
+    checkpoint.parent.mkdir(parents=True, exist_ok=True)
     first = 1
     if args.resume and checkpoint.exists():
         state = torch.load(checkpoint, weights_only=False, map_location=device)
