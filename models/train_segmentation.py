@@ -71,6 +71,11 @@ PHOTO_IDS = list(range(0, 45))
 # or none).
 HELD_OUT_IDS = list(range(30, 45))
 
+# `--time-limit-s` times the steps between these two and fits the run's
+# length to the time from them: past the workers' start and the batches
+# they made while the device started, at the pace they keep.
+FIT_FROM_STEP, FIT_TO_STEP = 100, 300
+
 
 def id_ranges(text: str) -> list[int]:
     """Photograph numbers from "30-44", "0-14,40" or "none"."""
@@ -577,7 +582,10 @@ def train(args) -> CableNet:
         batches = (make_batch(rng, real, synth, busy, cutouts, args, model) for _ in itertools.count())
     t_train = time.time()
     running = 0.0
-    for step in range(first, args.steps + 1):
+    last = sched.total_steps  # where the schedule ends, a resumed one's too
+    for step in itertools.count(first):
+        if step > last:
+            break
         x, y = (t.to(device, non_blocking=True) for t in next(batches))
         loss = loss_fn(model.logits(x), y, args.cl_dice_weight)
         opt.zero_grad(set_to_none=True)
@@ -585,11 +593,24 @@ def train(args) -> CableNet:
         opt.step()
         sched.step()
         running = 0.95 * running + 0.05 * loss.item() if step > 1 else loss.item()
-        if step % 50 == 0 or step == args.steps:
-            el = time.time() - t_train
-            print(f"step {step}/{args.steps} loss {running:.4f} {el:.0f} s ({el / (step - first + 1):.2f} s/step)",
+        if step == FIT_FROM_STEP:
+            t_fit = time.time()
+        if args.time_limit_s is not None and first == 1 and step == FIT_TO_STEP:
+            per_step_s = (time.time() - t_fit) / (FIT_TO_STEP - FIT_FROM_STEP)
+            fitted = FIT_FROM_STEP + int((args.time_limit_s - (t_fit - t_train)) / per_step_s)
+            fitted = max(FIT_TO_STEP, min(last, fitted))
+            print(f"{per_step_s:.4f} s a step: {fitted} of {last} steps fit in {args.time_limit_s:.0f} s",
                   flush=True)
-        if step % args.checkpoint_every == 0 or step == args.steps:
+            if fitted < last:
+                last = fitted
+                sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=last, pct_start=0.1)
+                for _ in range(step):
+                    sched.step()
+        if step % 50 == 0 or step == last:
+            el = time.time() - t_train
+            print(f"step {step}/{last} loss {running:.4f} {el:.0f} s ({el / (step - first + 1):.2f} s/step)",
+                  flush=True)
+        if step % args.checkpoint_every == 0 or step == last:
             torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
                         "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "step": step},
                        checkpoint)
@@ -739,6 +760,10 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=0,
                         help="processes that make the batches beside the training (0: the training process "
                              "itself, as for every network shipped so far); a GPU needs many")
+    parser.add_argument("--time-limit-s", type=float,
+                        help="train for fewer steps than --steps where they would take longer than this, as "
+                             "timed over its steps 100-300 (a GPU call's limit; models/README.md, "
+                             "\"Training on a GPU\")")
     parser.add_argument("--eval-only", action="store_true", help="measure existing models")
     args = parser.parse_args()
 
