@@ -104,6 +104,9 @@ def bytes_in(path: Path) -> None:
     for value in list(graph.initializer):
         if value.name not in used:
             graph.initializer.remove(value)
+    for node in list(graph.node):
+        if node.op_type == "Constant" and node.output[0] not in used:
+            graph.node.remove(node)
     onnx.checker.check_model(model)
     onnx.save(model, path)
 
