@@ -526,6 +526,11 @@ def freeze_batch_norms(model: CableNet) -> None:
             m.eval()
 
 
+def one_cycle(opt: torch.optim.Optimizer, lr: float, steps: int) -> torch.optim.lr_scheduler.OneCycleLR:
+    """The learning rate's schedule over a run of `steps` steps."""
+    return torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=lr, total_steps=steps, pct_start=0.1)
+
+
 def train(args) -> CableNet:
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
@@ -557,7 +562,7 @@ def train(args) -> CableNet:
     n_params = sum(p.numel() for p in model.parameters())
     print(f"model: {n_params} parameters", flush=True)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=args.steps, pct_start=0.1)
+    sched = one_cycle(opt, args.lr, args.steps)
     checkpoint = args.out.with_name(f"{args.out.stem}.checkpoint.pt")
     # Made now, so that a run is not lost at its first checkpoint.
     checkpoint.parent.mkdir(parents=True, exist_ok=True)
@@ -583,9 +588,9 @@ def train(args) -> CableNet:
     t_train = time.time()
     running = 0.0
     last = sched.total_steps  # where the schedule ends, a resumed one's too
-    for step in itertools.count(first):
-        if step > last:
-            break
+    fitting = args.time_limit_s is not None and first == 1
+    step = first
+    while step <= last:
         x, y = (t.to(device, non_blocking=True) for t in next(batches))
         loss = loss_fn(model.logits(x), y, args.cl_dice_weight)
         opt.zero_grad(set_to_none=True)
@@ -593,9 +598,9 @@ def train(args) -> CableNet:
         opt.step()
         sched.step()
         running = 0.95 * running + 0.05 * loss.item() if step > 1 else loss.item()
-        if step == FIT_FROM_STEP:
+        if fitting and step == FIT_FROM_STEP:
             t_fit = time.time()
-        if args.time_limit_s is not None and first == 1 and step == FIT_TO_STEP:
+        if fitting and step == FIT_TO_STEP:
             per_step_s = (time.time() - t_fit) / (FIT_TO_STEP - FIT_FROM_STEP)
             fitted = FIT_FROM_STEP + int((args.time_limit_s - (t_fit - t_train)) / per_step_s)
             fitted = max(FIT_TO_STEP, min(last, fitted))
@@ -603,7 +608,7 @@ def train(args) -> CableNet:
                   flush=True)
             if fitted < last:
                 last = fitted
-                sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=last, pct_start=0.1)
+                sched = one_cycle(opt, args.lr, last)
                 for _ in range(step):
                     sched.step()
         if step % 50 == 0 or step == last:
@@ -614,6 +619,7 @@ def train(args) -> CableNet:
             torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "sched": sched.state_dict(),
                         "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state(), "step": step},
                        checkpoint)
+        step += 1
     model.eval()
     print(f"training took {time.time() - t_train:.0f} s", flush=True)
     return model.to(device="cpu", memory_format=torch.contiguous_format)
