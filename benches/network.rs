@@ -22,11 +22,17 @@ use opencv::{imgcodecs, imgproc};
 
 fn image(root: &std::path::Path) -> Mat {
     let photo = root.join("../shared/data/cables-dev/00030.jpg");
-    if let Ok(image) = imgcodecs::imread(&photo, imgcodecs::IMREAD_COLOR)
+    if photo.is_file()
+        && let Ok(image) = imgcodecs::imread(&photo, imgcodecs::IMREAD_COLOR)
         && !image.empty()
     {
         return image;
     }
+    // The figures in docs/ are on the photograph; say when these are not.
+    eprintln!(
+        "timing a drawn image: {} is absent or unreadable",
+        photo.display()
+    );
     let mut image =
         Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::new(200.0, 210.0, 220.0, 0.0))
             .expect("allocating the bench image");
