@@ -1,10 +1,10 @@
 //! The segmentation network end to end: the shipped model through ONNX
 //! Runtime on images made here (a drawn cable on a plain and on a textured
 //! background), its agreement with the float network it was quantized
-//! from, its errors (a missing model, a model of another input type, a
-//! missing or invalid runtime library, a wrong image), and its accuracy on
-//! the held-out real photographs of cables-dev when that folder is beside
-//! the project.
+//! from and with the mirrored network that wraps it, its errors (a missing
+//! model, a model of another input type, a missing or invalid runtime
+//! library, a wrong image), and its accuracy on the held-out real
+//! photographs of cables-dev when that folder is beside the project.
 //!
 //! The ONNX Runtime library comes from `ORT_DYLIB_PATH`, else from
 //! `.setup/onnxruntime/libonnxruntime.so.1.31.1` (put there by
@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::eval::{self, GroundTruth};
 use cablecell::perception::vision::network::{
-    DEFAULT_MODEL, FLOAT_MODEL, NetworkError, SegmentationNet,
+    DEFAULT_MODEL, FLOAT_MODEL, MIRRORED_MODEL, NetworkError, SegmentationNet,
 };
 use cablecell::perception::vision::{Pipeline, VisionConfig};
 use opencv::core::{CV_8U, CV_8UC1, CV_8UC3, Mat, Point, Scalar, Vector};
@@ -219,6 +219,46 @@ fn the_8_bit_network_marks_what_the_float_one_marks() {
             "scene {i}: {differ} pixels differ, more than 2 % of {marked}"
         );
     }
+}
+
+/// The mirrored network is the shipped one run on the image and on its
+/// mirror image, the second probability map mirrored back, and the two
+/// averaged. At 0.5 the network sees exact 2 × 2 averages, which mirror
+/// with the image, so the mean made here must match it to float rounding.
+#[test]
+fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
+    let (mut plain, mut mirrored) = (net(), load(Path::new(MIRRORED_MODEL)));
+    plain.input_scale = 0.5;
+    mirrored.input_scale = 0.5;
+    let image = draw_cable(wood(3), Scalar::new(170.0, 90.0, 30.0, 0.0)).0;
+    let flip = |m: &Mat| {
+        let mut out = Mat::default();
+        opencv::core::flip(m, &mut out, 1).unwrap();
+        out
+    };
+    let seen = plain.probability(&image).unwrap();
+    let seen_mirrored = flip(&plain.probability(&flip(&image)).unwrap());
+    let averaged = mirrored.probability(&image).unwrap();
+    let (mut most_apart, mut worst) = (0.0f32, 0.0f32);
+    for ((a, b), m) in seen
+        .data_typed::<f32>()
+        .unwrap()
+        .iter()
+        .zip(seen_mirrored.data_typed::<f32>().unwrap())
+        .zip(averaged.data_typed::<f32>().unwrap())
+    {
+        most_apart = most_apart.max((a - b).abs());
+        worst = worst.max((m - (a + b) / 2.0).abs());
+    }
+    eprintln!("the two views differ by up to {most_apart}; the mirrored network by {worst}");
+    assert!(
+        most_apart > 0.01,
+        "the network sees the mirror image as it sees the image: the test shows nothing"
+    );
+    assert!(
+        worst < 1e-4,
+        "the mirrored network is {worst} from the mean of the two views"
+    );
 }
 
 #[test]

@@ -534,6 +534,15 @@ pub const FLOAT_MODEL: &str = concat!(
     "/models/cable_segmentation_float.onnx"
 );
 
+/// The shipped network wrapped to see the image mirrored too
+/// (`models/mirror_segmentation.py`): the mean of its probabilities on the
+/// image and on its mirror image, in twice the time; it counts more cables
+/// right on busy scenes (`models/README.md`, "The mirrored network").
+pub const MIRRORED_MODEL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/cable_segmentation_mirrored.onnx"
+);
+
 /// The ONNX Runtime library to load: `given`, else `$ORT_DYLIB_PATH`, else
 /// where the set-up puts it.
 pub fn runtime_library(given: Option<&Path>) -> PathBuf {
