@@ -308,25 +308,28 @@ fn eval_vision_scores_a_rendered_set_selects_images_and_sweeps_settings() {
         .iter()
         .map(|r| r["setting"].as_str().expect("setting"))
         .collect();
-    assert_eq!(settings.len(), 9, "{settings:?}");
+    assert_eq!(settings.len(), 10, "{settings:?}");
     assert!(settings[0].starts_with("classical mask"));
     assert!(settings.iter().any(|s| s.contains("superpixels")));
-    // The shipped 8-bit network scores as the float one it came from.
+    // The shipped 8-bit network scores as the float one it came from, and
+    // as the mirrored one that wraps it.
     assert!(settings[1].starts_with("network at 0.375×"));
     assert!(settings[4].starts_with("float network at 0.375×"));
+    assert!(settings[5].starts_with("mirrored network at 0.375×"));
     let dice = |row: usize| rows[row]["union_dice"].as_f64().expect("dice");
     assert!((dice(1) - dice(4)).abs() < 0.02, "{rows}");
+    assert!((dice(1) - dice(5)).abs() < 0.02, "{rows}");
     // The last row is the labels against themselves: the rendered masks are
     // their centre lines' tubes, so they agree closely.
-    assert!(settings[8].starts_with("labels' own centre lines"));
-    assert!(dice(8) > 0.9, "{rows}");
-    assert!(rows[8]["total_ms_median"].is_null(), "{rows}");
-    assert!(rows[8]["labels_found"].is_null(), "{rows}");
+    assert!(settings[9].starts_with("labels' own centre lines"));
+    assert!(dice(9) > 0.9, "{rows}");
+    assert!(rows[9]["total_ms_median"].is_null(), "{rows}");
+    assert!(rows[9]["labels_found"].is_null(), "{rows}");
     assert_eq!(rows[0]["labels_found"], 1.0, "{rows}");
     // The classical mask finds both cables along their whole length.
     for side in ["labelled_length_found", "found_length_labelled"] {
         assert!(rows[0][side].as_f64().expect("share") > 0.97, "{rows}");
-        assert!(rows[8][side].is_null(), "{rows}");
+        assert!(rows[9][side].is_null(), "{rows}");
     }
     let no_rounds = cablecell(&["eval-vision", text(&out), "--sweep", "--rounds", "0"]);
     assert_eq!(no_rounds.status.code(), Some(2));

@@ -5,7 +5,7 @@ use crate::cli::output::outln;
 use std::path::PathBuf;
 
 use cablecell::campaign::stats::Summary;
-use cablecell::perception::vision::network::FLOAT_MODEL;
+use cablecell::perception::vision::network::{FLOAT_MODEL, MIRRORED_MODEL};
 use schemars::JsonSchema;
 use serde::Serialize;
 
@@ -42,8 +42,8 @@ struct SweepRow {
 }
 
 /// The settings the sweep compares: the mask method, the network's input
-/// size, the shipped 8-bit network or the float one it came from, the
-/// instance method and the superpixels' size, each varied from
+/// size, the shipped 8-bit network, the float one it came from or the
+/// mirrored one that wraps it, the instance method and the superpixels' size, each varied from
 /// the command line's settings. Each row names the network's one input
 /// size, so it runs at that size on varied and dark backgrounds too.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
@@ -78,6 +78,17 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
         with(&|a| {
             a.mask = MaskArg::Network;
             a.model = PathBuf::from(FLOAT_MODEL);
+            a.instances = InstancesArg::Skeleton;
+        }),
+    ));
+    settings.push((
+        format!(
+            "mirrored network at {}×, skeleton (cable_segmentation_mirrored.onnx)",
+            base.net_scale
+        ),
+        with(&|a| {
+            a.mask = MaskArg::Network;
+            a.model = PathBuf::from(MIRRORED_MODEL);
             a.instances = InstancesArg::Skeleton;
         }),
     ));
