@@ -70,28 +70,18 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
             }),
         ));
     }
-    settings.push((
-        format!(
-            "float network at {}×, skeleton (cable_segmentation_float.onnx)",
-            base.net_scale
-        ),
-        with(&|a| {
-            a.mask = MaskArg::Network;
-            a.model = PathBuf::from(FLOAT_MODEL);
-            a.instances = InstancesArg::Skeleton;
-        }),
-    ));
-    settings.push((
-        format!(
-            "mirrored network at {}×, skeleton (cable_segmentation_mirrored.onnx)",
-            base.net_scale
-        ),
-        with(&|a| {
-            a.mask = MaskArg::Network;
-            a.model = PathBuf::from(MIRRORED_MODEL);
-            a.instances = InstancesArg::Skeleton;
-        }),
-    ));
+    for (kind, model) in [("float", FLOAT_MODEL), ("mirrored", MIRRORED_MODEL)] {
+        let model = PathBuf::from(model);
+        let file = model.file_name().unwrap_or_default().to_string_lossy();
+        settings.push((
+            format!("{kind} network at {}×, skeleton ({file})", base.net_scale),
+            with(&|a| {
+                a.mask = MaskArg::Network;
+                a.model = model.clone();
+                a.instances = InstancesArg::Skeleton;
+            }),
+        ));
+    }
     for widths in [1.5, 2.0, 3.0] {
         settings.push((
             format!(
