@@ -43,9 +43,10 @@ struct SweepRow {
 
 /// The settings the sweep compares: the mask method, the network's input
 /// size, the shipped 8-bit network, the float one it came from or the
-/// mirrored one that wraps it, the instance method and the superpixels' size, each varied from
-/// the command line's settings. Each row names the network's one input
-/// size, so it runs at that size on varied and dark backgrounds too.
+/// mirrored one that wraps it, the instance method and the superpixels'
+/// size, each varied from the command line's settings. Each row names the
+/// network's one input size, so it runs at that size on varied and dark
+/// backgrounds too.
 fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     let with = |change: &dyn Fn(&mut VisionArgs)| {
         let mut args = base.clone();
