@@ -270,7 +270,8 @@ impl PandaEmulator {
     }
 
     /// Stops (or resumes) sending states, as a controller whose network
-    /// link failed.
+    /// link failed. Once it returns, no further state is sent; those sent
+    /// before may still wait in the client's socket.
     pub fn set_silent(&self, silent: bool) {
         lock(&self.controller).silent = silent;
     }
@@ -497,12 +498,20 @@ fn serve(
 fn stream_states(udp: &UdpSocket, controller: &Mutex<Controller>, stop: &AtomicBool) {
     let mut buffer = vec![0_u8; 4 * std::mem::size_of::<RobotCommand>()];
     while !stop.load(Ordering::Relaxed) {
-        let (state, client, moving) = {
+        // The state is sent under the lock, so that once `set_silent`
+        // returns no state is on its way.
+        let (state, moving) = {
             let mut controller = lock(controller);
             match controller.client {
                 Some((_, client)) if !controller.silent => {
                     controller.message_id += 1;
-                    (controller.state(), client, controller.motion.is_some())
+                    let state = controller.state();
+                    if let Ok(datagram) = bincode::serialize(&state) {
+                        // A client that has gone (its port closed) is not
+                        // an error here.
+                        let _ = udp.send_to(&datagram, client);
+                    }
+                    (state, controller.motion.is_some())
                 }
                 _ => {
                     drop(controller);
@@ -511,11 +520,6 @@ fn stream_states(udp: &UdpSocket, controller: &Mutex<Controller>, stop: &AtomicB
                 }
             }
         };
-        let Ok(datagram) = bincode::serialize(&state) else {
-            continue;
-        };
-        // A client that has gone (its port closed) is not an error here.
-        let _ = udp.send_to(&datagram, client);
         if !moving {
             std::thread::sleep(Duration::from_secs_f64(CYCLE_S));
             continue;
