@@ -28,6 +28,17 @@ pub(super) const SPLIT_CROSSING_WIDTHS: f64 = 10.0;
 /// 45° (0.6 rad split 3 crossings of the training photographs wrongly).
 const SPLIT_CONTINUE_RAD: f64 = 0.9;
 
+/// A spur that runs on into another branch of its 3-way junction within
+/// this, and is at least [`CABLE_END_MIN_WIDTHS`] long, is a cable's end
+/// that another cable's end touches, not a spur of the thinning (which
+/// leaves its junction at a slant): pruned, the cable that touches it would
+/// run on into it as one path, and the cable would lose its end.
+const CABLE_END_STRAIGHT_RAD: f64 = 0.5;
+
+/// Thinning a blunt end or a ragged edge leaves spurs of up to about this
+/// many cable widths.
+const CABLE_END_MIN_WIDTHS: f64 = 1.0;
+
 /// A run of skeleton that leaves a crossing and returns to it is a loop of
 /// one cable, not the lens between two cables crossing twice, when it is
 /// this many times longer than the run the two strands share.
@@ -231,10 +242,12 @@ impl Graph {
 
     /// Drops spurs (end-to-junction edges shorter than `spur_px`), shortest
     /// first, as long as their junction, merged as `root` says, keeps at
-    /// least two other branches. Pruned again once junctions are merged, a
-    /// spur left at one of a crossing's junctions (whose only other branch
-    /// ran into the crossing) goes too, and is not paired with a cable.
-    pub(super) fn prune_spurs(&mut self, spur_px: f64, root: &[usize]) {
+    /// least two other branches, but not a cable's end at a 3-way junction
+    /// (see [`CABLE_END_STRAIGHT_RAD`]). Pruned again once junctions are
+    /// merged, a spur left at one of a crossing's junctions (whose only
+    /// other branch ran into the crossing) goes too, and is not paired with
+    /// a cable.
+    pub(super) fn prune_spurs(&mut self, spur_px: f64, root: &[usize], width_px: f64) {
         let mut degree = self.degrees(root);
         let mut spurs: Vec<usize> = (0..self.edges.len())
             .filter(|&e| {
@@ -249,16 +262,37 @@ impl Graph {
         spurs.sort_by(|&a, &b| self.edges[a].length_px.total_cmp(&self.edges[b].length_px));
         for e in spurs {
             let ends = self.edges[e].ends;
-            let junction = if self.nodes[ends[0]].kind == NodeKind::Junction {
-                root[ends[0]]
-            } else {
-                root[ends[1]]
-            };
-            if degree[junction] >= 3 {
+            let side = usize::from(self.nodes[ends[0]].kind != NodeKind::Junction);
+            let junction = root[ends[side]];
+            let cable_end = degree[junction] == 3 && self.is_cable_end((e, side), root, width_px);
+            if degree[junction] >= 3 && !cable_end {
                 self.edges[e].alive = false;
                 degree[junction] -= 1;
             }
         }
+    }
+
+    /// Whether the spur `spur` (its edge, and its end at the junction) is a
+    /// cable's end (see [`CABLE_END_STRAIGHT_RAD`]), its junction merged as
+    /// `root` says.
+    fn is_cable_end(&self, spur: Branch, root: &[usize], width_px: f64) -> bool {
+        let (e, side) = spur;
+        if self.edges[e].length_px < CABLE_END_MIN_WIDTHS * width_px {
+            return false;
+        }
+        let at = self.edges[e].ends[side];
+        let centre = self.nodes[at].centre_px;
+        let spur_dir = self.branch_direction(spur, centre, width_px);
+        self.edges.iter().enumerate().any(|(o, edge)| {
+            o != e
+                && edge.alive
+                && !edge.internal
+                && (0..2).any(|k| {
+                    root[edge.ends[k]] == root[at]
+                        && bend_rad(spur_dir, self.branch_direction((o, k), centre, width_px))
+                            < CABLE_END_STRAIGHT_RAD
+                })
+        })
     }
 
     /// Merges junctions that are one crossing; returns each node's merged
@@ -491,7 +525,7 @@ mod tests {
             [[59, 61], [62, 64]],
         ]);
         let (width_px, spur_px) = (6.0, 13.0);
-        graph.prune_spurs(spur_px, &graph.unmerged());
+        graph.prune_spurs(spur_px, &graph.unmerged(), width_px);
         let spurs_alive = |graph: &Graph| {
             graph
                 .edges
@@ -502,7 +536,7 @@ mod tests {
         };
         assert_eq!(spurs_alive(&graph), 1);
         let root = graph.merge_junctions(width_px);
-        graph.prune_spurs(spur_px, &root);
+        graph.prune_spurs(spur_px, &root, width_px);
         assert_eq!(spurs_alive(&graph), 0);
         // The merged junction is left with the cable's two branches.
         assert_eq!(branch_counts(&graph, &root), vec![2]);

@@ -71,9 +71,9 @@ pub fn paths_from_mask(
     } = thin::skeleton(mask)?;
     let mut graph = Graph::build(grid, &pixels);
     let spur_px = SPUR_WIDTHS * width_px + SPUR_EXTRA_PX;
-    graph.prune_spurs(spur_px, &graph.unmerged());
+    graph.prune_spurs(spur_px, &graph.unmerged(), width_px);
     let root = graph.merge_junctions(width_px);
-    graph.prune_spurs(spur_px, &root);
+    graph.prune_spurs(spur_px, &root, width_px);
     let root = pairing::merge_cheaper_crossings(&mut graph, root, width_px);
     let junctions = pairing::junction_branches(&graph, &root).len();
     let shared = pairing::share_runs(&mut graph, &root, mask, width_px)?;

@@ -600,6 +600,22 @@ mod tests {
     }
 
     #[test]
+    fn a_cable_ending_against_another_near_its_end_leaves_it_whole() {
+        // A 20 px cable along y = 100, and another whose end comes down at
+        // 45° onto its side 35 px from its end: the first cable's end is a
+        // short straight run past the junction, as long as a thinning spur.
+        let paths = paths_of(&[(&[(60, 100), (360, 100)], 20), (&[(10, 20), (95, 95)], 20)]);
+        assert_eq!(paths.len(), 2, "{paths:?}");
+        let along = paths
+            .iter()
+            .find(|path| path.iter().all(|p| (p[1] - 100.0).abs() < 5.0))
+            .expect("one path along the first cable");
+        let xs = along.iter().map(|p| p[0]);
+        let (from, to) = (xs.clone().fold(f64::MAX, f64::min), xs.fold(0.0, f64::max));
+        assert!(from < 75.0 && to > 345.0, "{from} to {to}");
+    }
+
+    #[test]
     fn colour_costs_pair_like_colours_and_let_shading_pass() {
         // Three branches: 0 and 1 continue each other a little better than
         // 0 and 2, by shape.
