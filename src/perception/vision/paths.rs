@@ -27,6 +27,12 @@ const JOIN_MAX_BEND_RAD: f64 = 0.45;
 /// glint. So straight and so alike, two ends are rarely two cables.
 const LONG_GAP_WIDTHS: f64 = 15.0;
 const LONG_GAP_MAX_BEND_RAD: f64 = 0.25;
+/// Across a gap longer than this many cable widths, the step from one end
+/// to the other must also continue both ends. A shorter gap has no
+/// direction of its own: where the mask narrows to a neck (a cable over a
+/// stroke of paint, a binder's punched edge), its skeleton's ends hook
+/// aside and lie beside each other as often as in line.
+const GAP_DIRECTION_MIN_WIDTHS: f64 = 1.0;
 /// Paths that turn by up to this also continue each other when the middle
 /// of the step lies on another cable (within half a width of its centre
 /// line, plus [`UNDER_EXTRA_PX`]) and, given the image, the two ends'
@@ -178,7 +184,7 @@ pub fn join_continuations(
                 }
                 let onward = [-db[0], -db[1]];
                 let mut bend = angle_rad(da, onward);
-                if gap_px > 0.5 * width_px.max(2.0) {
+                if gap_px > GAP_DIRECTION_MIN_WIDTHS * width_px.max(2.0) {
                     bend = bend.max(angle_rad(da, gap)).max(angle_rad(gap, onward));
                 }
                 // Only a pair better than the best so far is worth the
@@ -486,6 +492,18 @@ mod tests {
             segment_px([105.0, 112.0], [200.0, 112.0]),
         ];
         assert_eq!(join_continuations(parallel, None, 8.0).unwrap().len(), 2);
+    }
+
+    #[test]
+    fn ends_offset_sideways_across_a_gap_under_a_width_are_joined() {
+        // 12 px wide: the second piece starts 4 px on and 6 px aside, as
+        // the skeleton's ends hook where the mask narrows to a neck. The
+        // step between the ends turns by 0.98 rad from both.
+        let pieces = vec![
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([104.0, 106.0], [200.0, 106.0]),
+        ];
+        assert_eq!(join_continuations(pieces, None, 12.0).unwrap().len(), 1);
     }
 
     /// `paths` drawn 8 px wide on a gray image, each in its colour.
