@@ -1,6 +1,6 @@
 //! `cablecell render-dataset`: the layout it writes (that of cables-dev,
-//! which `eval-vision` and the training script read), its determinism for
-//! a seed, and its refusals.
+//! which `eval-vision` and the training script read), with rendered cables
+//! or another folder's, its determinism for a seed, and its refusals.
 
 use std::path::Path;
 use std::process::Output;
@@ -52,70 +52,171 @@ fn writes_the_cables_dev_layout() {
         String::from_utf8_lossy(&run.stderr)
     );
     for index in 0..4 {
-        let stem = format!("{index:05}");
-        let image = read(&out.join(format!("{stem}.jpg")), imgcodecs::IMREAD_COLOR);
-        assert_eq!((image.cols(), image.rows()), (320, 240), "{stem}");
-
-        let polylines = std::fs::read_to_string(out.join(format!("{stem}.txt"))).expect("txt");
-        let lines: Vec<Vec<f64>> = polylines
-            .lines()
-            .map(|l| {
-                l.split_whitespace()
-                    .map(|w| w.parse().expect("number"))
-                    .collect()
-            })
-            .collect();
-        assert!(
-            (2..=3).contains(&lines.len()),
-            "{stem}: {} cables",
-            lines.len()
-        );
-
-        let union = read(
-            &out.join(format!("{stem}_mask_all.png")),
-            imgcodecs::IMREAD_GRAYSCALE,
-        );
-        let mut rebuilt = Mat::zeros(240, 320, core::CV_8U)
-            .expect("zeros")
-            .to_mat()
-            .expect("mat");
-        for (k, numbers) in lines.iter().enumerate() {
-            // `N x0 y0 ...`: N pairs follow.
-            let n = numbers[0] as usize;
-            assert_eq!(numbers.len(), 1 + 2 * n, "{stem} line {}", k + 1);
-            let mask = read(
-                &out.join(format!("{stem}_mask_{k}.png")),
-                imgcodecs::IMREAD_GRAYSCALE,
-            );
-            assert_eq!((mask.cols(), mask.rows()), (320, 240));
-            // A polyline point inside the image lies on its own cable's mask.
-            let inside: Vec<(i32, i32)> = numbers[1..]
-                .chunks_exact(2)
-                .map(|p| (p[0] as i32, p[1] as i32))
-                .filter(|&(x, y)| (0..320).contains(&x) && (0..240).contains(&y))
-                .collect();
-            assert!(!inside.is_empty(), "{stem}: cable {k} never in the image");
-            for (x, y) in inside {
-                assert_eq!(*mask.at_2d::<u8>(y, x).expect("pixel"), 255, "{stem} {k}");
-            }
-            let mut next = Mat::default();
-            core::bitwise_or(&rebuilt, &mask, &mut next, &core::no_array()).expect("or");
-            rebuilt = next;
-        }
-        assert!(
-            !out.join(format!("{stem}_mask_{}.png", lines.len()))
-                .exists(),
-            "{stem}: more masks than polylines"
-        );
-        let mut diff = Mat::default();
-        core::absdiff(&rebuilt, &union, &mut diff).expect("absdiff");
-        assert_eq!(
-            core::count_non_zero(&diff).expect("count"),
-            0,
-            "{stem}: the union mask is not the union of the cables' masks"
-        );
+        let cables = check_layout(&out, &format!("{index:05}"), (320, 240));
+        assert!((2..=3).contains(&cables), "{index}: {cables} cables");
     }
     assert!(!out.join("00004.jpg").exists());
+}
+
+/// Checks image `stem` of the data set in `out` against the cables-dev
+/// layout: the image `size` (width, height), one mask per polyline, each
+/// polyline's points in view on its own mask, the union mask the masks'
+/// union. Returns its number of cables.
+fn check_layout(out: &Path, stem: &str, size: (i32, i32)) -> usize {
+    let (width, height) = size;
+    let image = read(&out.join(format!("{stem}.jpg")), imgcodecs::IMREAD_COLOR);
+    assert_eq!((image.cols(), image.rows()), size, "{stem}");
+
+    let polylines = std::fs::read_to_string(out.join(format!("{stem}.txt"))).expect("txt");
+    let lines: Vec<Vec<f64>> = polylines
+        .lines()
+        .map(|l| {
+            l.split_whitespace()
+                .map(|w| w.parse().expect("number"))
+                .collect()
+        })
+        .collect();
+
+    let union = read(
+        &out.join(format!("{stem}_mask_all.png")),
+        imgcodecs::IMREAD_GRAYSCALE,
+    );
+    let mut rebuilt = Mat::zeros(height, width, core::CV_8U)
+        .expect("zeros")
+        .to_mat()
+        .expect("mat");
+    for (k, numbers) in lines.iter().enumerate() {
+        // `N x0 y0 ...`: N pairs follow.
+        let n = numbers[0] as usize;
+        assert_eq!(numbers.len(), 1 + 2 * n, "{stem} line {}", k + 1);
+        let mask = read(
+            &out.join(format!("{stem}_mask_{k}.png")),
+            imgcodecs::IMREAD_GRAYSCALE,
+        );
+        assert_eq!((mask.cols(), mask.rows()), size);
+        // A polyline point inside the image lies on its own cable's mask.
+        let inside: Vec<(i32, i32)> = numbers[1..]
+            .chunks_exact(2)
+            .map(|p| (p[0] as i32, p[1] as i32))
+            .filter(|&(x, y)| (0..width).contains(&x) && (0..height).contains(&y))
+            .collect();
+        assert!(!inside.is_empty(), "{stem}: cable {k} never in the image");
+        for (x, y) in inside {
+            assert_eq!(*mask.at_2d::<u8>(y, x).expect("pixel"), 255, "{stem} {k}");
+        }
+        let mut next = Mat::default();
+        core::bitwise_or(&rebuilt, &mask, &mut next, &core::no_array()).expect("or");
+        rebuilt = next;
+    }
+    assert!(
+        !out.join(format!("{stem}_mask_{}.png", lines.len()))
+            .exists(),
+        "{stem}: more masks than polylines"
+    );
+    let mut diff = Mat::default();
+    core::absdiff(&rebuilt, &union, &mut diff).expect("absdiff");
+    assert_eq!(
+        core::count_non_zero(&diff).expect("count"),
+        0,
+        "{stem}: the union mask is not the union of the cables' masks"
+    );
+    lines.len()
+}
+
+/// The mean colour of `out`'s image `stem` under its union mask.
+fn cable_colour(out: &Path, stem: &str) -> core::Scalar {
+    let image = read(&out.join(format!("{stem}.jpg")), imgcodecs::IMREAD_COLOR);
+    let union = read(
+        &out.join(format!("{stem}_mask_all.png")),
+        imgcodecs::IMREAD_GRAYSCALE,
+    );
+    core::mean(&image, &union).expect("mean")
+}
+
+#[test]
+fn another_folders_cables_lie_over_rendered_backgrounds_with_their_labels() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let photos = dir.path().join("photos");
+    let size = ["--width-px", "320", "--height-px", "240"];
+    let source = [
+        &size[..],
+        &[
+            "--count",
+            "1",
+            "--seed",
+            "13",
+            "--backgrounds",
+            "plain",
+            "--max-cables",
+            "1",
+        ],
+    ]
+    .concat();
+    assert!(render(&photos, &source).status.success());
+
+    let out = dir.path().join("pasted");
+    let pasted = [
+        &size[..],
+        &[
+            "--count",
+            "3",
+            "--seed",
+            "7",
+            "--backgrounds",
+            "busy",
+            "--cables-from",
+            text(&photos),
+            "--to",
+            "00000",
+        ],
+    ]
+    .concat();
+    let run = render(&out, &pasted);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(String::from_utf8_lossy(&run.stdout).contains("(1 image)"));
+    // All three hold photograph 00000's cable, each placed its own way:
+    // its colours under its mask, its label in other places.
+    let colour = cable_colour(&photos, "00000");
+    let mut labels = Vec::new();
+    for index in 0..3 {
+        let stem = format!("{index:05}");
+        let cables = check_layout(&out, &stem, (320, 240));
+        assert_eq!(cables, 1, "{stem}");
+        let pasted = cable_colour(&out, &stem);
+        for channel in 0..3 {
+            assert!(
+                (pasted[channel] - colour[channel]).abs() < 25.0,
+                "{stem}: {pasted:?} against {colour:?}"
+            );
+        }
+        labels.push(std::fs::read_to_string(out.join(format!("{stem}.txt"))).expect("txt"));
+    }
+    assert!(
+        labels[0] != labels[1] && labels[1] != labels[2],
+        "{labels:?}"
+    );
+    assert!(!out.join("00003.jpg").exists());
+
+    // Refused: a folder with no labelled images, rendered cables' options
+    // beside it, and a photograph range without it.
+    let missing = dir.path().join("no-such-folder");
+    let run = render(&dir.path().join("a"), &["--cables-from", text(&missing)]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("no-such-folder"));
+    let run = render(
+        &dir.path().join("b"),
+        &["--cables-from", text(&photos), "--max-cables", "2"],
+    );
+    assert_eq!(run.status.code(), Some(2));
+    let run = render(&dir.path().join("c"), &["--from", "00001"]);
+    assert_eq!(run.status.code(), Some(2));
+    for name in ["a", "b", "c"] {
+        assert!(!dir.path().join(name).exists(), "{name}");
+    }
 }
 
 #[test]

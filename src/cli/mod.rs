@@ -11,6 +11,7 @@ pub mod emulate;
 pub mod eval_vision;
 pub mod graph;
 pub mod json;
+pub mod labelled_folder;
 pub mod output;
 pub mod plot;
 pub mod progress;

@@ -1,13 +1,16 @@
 //! `cablecell render-dataset OUT`: synthetic images with exact ground
 //! truth, in the layout of cables-dev, for training the segmentation
-//! network and for scoring the pipeline with `eval-vision`.
+//! network and for scoring the pipeline with `eval-vision`; with
+//! `--cables-from`, a labelled folder's real cables over rendered
+//! backgrounds.
 
 use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 
-use cablecell::sim::render::{BackgroundChoice, SceneOptions, write_dataset};
+use cablecell::sim::render::{BackgroundChoice, LabelledPhotograph, SceneOptions, write_dataset};
 use clap::Args;
 
+use super::labelled_folder::{LabelledImage, load_labelled};
 use super::{Status, number_within, progress};
 
 #[derive(Args, Debug, Clone)]
@@ -46,6 +49,21 @@ pub struct RenderDatasetArgs {
     /// Keep cables apart (no crossings).
     #[arg(long)]
     pub no_crossings: bool,
+    /// Take each image's cables from a labelled folder's photographs (the
+    /// cables-dev layout), in turn, instead of rendering them: each
+    /// photograph's cables, cut along their masks, mirrored and enlarged
+    /// up to twice, over a rendered background without cables, their
+    /// labels moved with them.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["min_cables", "max_cables", "min_diameter_px", "max_diameter_px", "no_crossings"])]
+    pub cables_from: Option<PathBuf>,
+    /// With --cables-from: only photographs whose name sorts at or after
+    /// this, e.g. 00030.
+    #[arg(long, requires = "cables_from")]
+    pub from: Option<String>,
+    /// With --cables-from: only photographs whose name sorts at or before
+    /// this, e.g. 00044.
+    #[arg(long, requires = "cables_from")]
+    pub to: Option<String>,
 }
 
 /// 1 to 100 000 images: a training set of a few thousand is plenty.
@@ -96,13 +114,44 @@ pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
         eprintln!("error: {}: {reason}", args.out.display());
         return Status::BadInput;
     }
+    let labelled: Vec<LabelledImage> = match &args.cables_from {
+        Some(dir) => match load_labelled(dir, args.from.as_deref(), args.to.as_deref()) {
+            Ok(labelled) => labelled,
+            Err(messages) => {
+                for message in messages {
+                    eprintln!("error: render-dataset: {message}");
+                }
+                return Status::BadInput;
+            }
+        },
+        None => Vec::new(),
+    };
+    let photos: Vec<LabelledPhotograph> = labelled
+        .iter()
+        .map(|l| LabelledPhotograph {
+            bgr: &l.image,
+            masks: &l.truth.masks,
+            centerlines_px: &l.truth.polylines_px,
+        })
+        .collect();
     let bar = progress::bar(args.count, "images");
-    let written = write_dataset(&args.out, args.count, args.seed, &options, || bar.inc(1));
+    let written = write_dataset(&args.out, args.count, args.seed, &options, &photos, || {
+        bar.inc(1)
+    });
     bar.finish_and_clear();
     match written {
         Ok(()) => {
+            let cables = match &args.cables_from {
+                Some(dir) => format!(
+                    ", cables from {} ({} image{})",
+                    dir.display(),
+                    photos.len(),
+                    if photos.len() == 1 { "" } else { "s" }
+                ),
+                None => String::new(),
+            };
             outln!(
-                "{}: {} images, seed {}",
+                "{}: {} images, seed {}{cables}",
                 args.out.display(),
                 args.count,
                 args.seed

@@ -1,6 +1,5 @@
 //! `cablecell eval-vision DIR [--from STEM] [--to STEM] [--sweep [--rounds N]] [--overlay DIR] [--labelled-mask]`
 
-mod load;
 mod print;
 mod score;
 pub mod sweep;
@@ -9,15 +8,14 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use cablecell::campaign::stats::{Rate, Summary};
-use cablecell::perception::vision::eval::{GroundTruth, ImageScore};
+use cablecell::perception::vision::eval::ImageScore;
 use clap::Args;
-use opencv::core::Mat;
 use schemars::JsonSchema;
 use serde::Serialize;
 
+use super::labelled_folder::load_labelled;
 use super::vision_io::{MaskArg, VisionArgs};
 use super::{Status, progress};
-use load::load_samples;
 use print::print_evaluation;
 use score::{Failure, evaluate, labels_own_dice};
 use sweep::sweep;
@@ -138,16 +136,8 @@ struct LengthShare {
     length_px: f64,
 }
 
-/// An image with its ground truth, read once for all settings.
-struct Sample {
-    stem: String,
-    path: PathBuf,
-    image: Mat,
-    truth: GroundTruth,
-}
-
 pub fn eval_vision(args: &EvalVisionArgs) -> Status {
-    let samples = match load_samples(args) {
+    let samples = match load_labelled(&args.dir, args.from.as_deref(), args.to.as_deref()) {
         Ok(samples) => samples,
         Err(messages) => {
             for message in messages {

@@ -16,12 +16,13 @@ use opencv::imgproc;
 use opencv::prelude::*;
 
 use crate::cli::Status;
+use crate::cli::labelled_folder::LabelledImage;
 use crate::cli::vision_io::{VisionArgs, create_dir, draw_line, draw_overlay, write_png};
 
-use super::{Evaluation, LabelsOwnDice, LengthShare, MaskUse, Sample};
+use super::{Evaluation, LabelsOwnDice, LengthShare, MaskUse};
 use indicatif::ProgressBar;
 
-pub(super) fn labels_own_dice(samples: &[Sample]) -> Result<Option<LabelsOwnDice>, String> {
+pub(super) fn labels_own_dice(samples: &[LabelledImage]) -> Result<Option<LabelsOwnDice>, String> {
     let truths: Vec<&GroundTruth> = samples.iter().map(|s| &s.truth).collect();
     let consistency = label_consistency(&truths)
         .map_err(|error| format!("drawing the labelled centre lines: {error}"))?;
@@ -59,12 +60,12 @@ impl From<String> for Failure {
 /// allocations are not counted as its time. `bar` ticks once an image.
 pub(super) fn evaluate(
     vision: &VisionArgs,
-    samples: &[Sample],
+    samples: &[LabelledImage],
     labelled_mask: bool,
     overlay: Option<&Path>,
     bar: &ProgressBar,
 ) -> Result<Evaluation, Failure> {
-    let failed = |sample: &Sample, error: &VisionError| Failure {
+    let failed = |sample: &LabelledImage, error: &VisionError| Failure {
         message: format!("{}: {error}", sample.path.display()),
         status: if error.is_in_setup() {
             Status::BadInput

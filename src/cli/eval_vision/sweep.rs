@@ -10,10 +10,11 @@ use schemars::JsonSchema;
 use serde::Serialize;
 
 use crate::cli::Status;
+use crate::cli::labelled_folder::LabelledImage;
 use crate::cli::vision_io::{InstancesArg, MaskArg, VisionArgs};
 
 use super::score::{Failure, evaluate, labels_own_dice};
-use super::{EvalVisionArgs, Evaluation, Sample};
+use super::{EvalVisionArgs, Evaluation};
 use crate::cli::progress;
 
 /// What `eval-vision --sweep --json` prints.
@@ -99,7 +100,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
     settings
 }
 
-pub(super) fn sweep(args: &EvalVisionArgs, samples: &[Sample]) -> Status {
+pub(super) fn sweep(args: &EvalVisionArgs, samples: &[LabelledImage]) -> Status {
     let settings = sweep_settings(&args.vision);
     // The first round's evaluations (the pipeline is deterministic, so
     // later rounds score alike), gathering every round's end-to-end times.

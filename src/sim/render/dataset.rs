@@ -10,6 +10,7 @@ use opencv::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use super::pasted::{LabelledPhotograph, Placement, paste_cables};
 use super::{RenderError, RenderedScene, SceneOptions, cv, random_scene, render, unite};
 
 /// JPEG quality of a data set's images: high enough to keep thin cables,
@@ -26,13 +27,16 @@ const POLYLINE_SPACING_PX: f64 = 6.0;
 /// `NNNNN_mask_all.png` and `NNNNN.txt` (line K: `N x0 y0 x1 y1 ...`, the
 /// K-th cable's centre line, integer pixels as in cables-dev). Image i is
 /// drawn from stream i of a generator seeded with `seed`, so it does not
-/// depend on `count`. `written` is called after each image (a progress
+/// depend on `count`. With `photos`, image i holds photograph i (modulo
+/// their number)'s cables over a background ([`pasted_scene`]) in place
+/// of rendered ones. `written` is called after each image (a progress
 /// bar's tick).
 pub fn write_dataset(
     dir: &Path,
     count: usize,
     seed: u64,
     options: &SceneOptions,
+    photos: &[LabelledPhotograph],
     mut written: impl FnMut(),
 ) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|source| RenderError::Io {
@@ -40,7 +44,11 @@ pub fn write_dataset(
         source,
     })?;
     for index in 0..count {
-        let rendered = dataset_scene(seed, index as u64, options)?;
+        let rendered = if photos.is_empty() {
+            dataset_scene(seed, index as u64, options)?
+        } else {
+            pasted_scene(seed, index as u64, options, &photos[index % photos.len()])?
+        };
         write_scene_files(dir, &format!("{index:05}"), &rendered)?;
         written();
     }
@@ -54,10 +62,37 @@ pub fn dataset_scene(
     index: u64,
     options: &SceneOptions,
 ) -> Result<RenderedScene, RenderError> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(index);
+    let mut rng = stream(seed, index);
     let scene = random_scene(&mut rng, options);
     render(&scene, &mut rng)
+}
+
+/// Image `index` of a data set of `photo`'s cables over rendered
+/// backgrounds: the background [`dataset_scene`] draws for `options` less
+/// its cables, the photograph laid over it in a placement drawn from the
+/// same stream ([`Placement::random`]).
+pub fn pasted_scene(
+    seed: u64,
+    index: u64,
+    options: &SceneOptions,
+    photo: &LabelledPhotograph,
+) -> Result<RenderedScene, RenderError> {
+    let mut rng = stream(seed, index);
+    let no_cables = SceneOptions {
+        min_cables: 0,
+        max_cables: 0,
+        ..options.clone()
+    };
+    let background = render(&random_scene(&mut rng, &no_cables), &mut rng)?;
+    let placement = Placement::random(&mut rng, options.width_px, options.height_px);
+    paste_cables(&background.bgr, photo, &placement)
+}
+
+/// Stream `index` of a generator seeded with `seed`: image `index`'s draws.
+fn stream(seed: u64, index: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(index);
+    rng
 }
 
 /// Writes `rendered` into the existing folder `dir` as image `stem` of a

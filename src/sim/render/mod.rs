@@ -21,6 +21,7 @@ mod dataset;
 mod hand;
 mod marker;
 mod occluder;
+mod pasted;
 mod random;
 mod tube;
 mod world_view;
@@ -35,8 +36,9 @@ use opencv::imgproc;
 use opencv::prelude::*;
 use rand::{Rng, RngExt};
 
-pub use dataset::{dataset_scene, write_dataset, write_scene_files};
+pub use dataset::{dataset_scene, pasted_scene, write_dataset, write_scene_files};
 pub use occluder::{Board, OccluderSpec, Occlusion};
+pub use pasted::LabelledPhotograph;
 pub use random::{BackgroundChoice, SceneOptions, random_scene};
 pub use world_view::render_world;
 

@@ -304,6 +304,10 @@ fn apart(a: &CableSpec, b: &CableSpec) -> bool {
     })
 }
 
+/// How much of a cable is in view, at least, as a share of the image's
+/// diagonal: less is a sliver at the border, not a cable to find.
+pub(super) const MIN_IN_VIEW_DIAGONALS: f64 = 0.1;
+
 /// A smooth random curve a pixel a step: the heading turns by a curvature
 /// that wanders (mean-reverting) within a bound set by the radius, so the
 /// curve bends like a wire and never tighter than a few diameters. It
@@ -373,5 +377,5 @@ fn random_curve(rng: &mut impl Rng, width: i32, height: i32, radius: f64) -> Opt
             return None;
         }
     }
-    (inside_px >= 0.1 * diagonal).then_some(points)
+    (inside_px >= MIN_IN_VIEW_DIAGONALS * diagonal).then_some(points)
 }

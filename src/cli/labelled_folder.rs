@@ -1,16 +1,30 @@
-//! Reading a labelled folder: its images and their ground truth, once for
-//! every setting.
+//! Reading a labelled folder (the cables-dev layout): its images and their
+//! ground truth, for `eval-vision` to score and for `render-dataset` to
+//! take cables from.
+
+use std::path::{Path, PathBuf};
 
 use cablecell::hw::camera::read_image;
 use cablecell::perception::vision::eval::{GroundTruth, labelled_images};
+use opencv::core::Mat;
 
-use super::{EvalVisionArgs, Sample};
+/// An image with its ground truth, read once for all settings.
+pub struct LabelledImage {
+    pub stem: String,
+    pub path: PathBuf,
+    pub image: Mat,
+    pub truth: GroundTruth,
+}
 
-/// The selected images of the folder and their truth, or what is wrong:
-/// with every image that cannot be read or whose truth is malformed, so
-/// that one run lists all there is to mend.
-pub(super) fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<String>> {
-    let dir = &args.dir;
+/// The images of `dir` whose names sort from `from` to `to` (each
+/// inclusive, either open), with their truth, or what is wrong: with every
+/// image that cannot be read or whose truth is malformed, so that one run
+/// lists all there is to mend.
+pub fn load_labelled(
+    dir: &Path,
+    from: Option<&str>,
+    to: Option<&str>,
+) -> Result<Vec<LabelledImage>, Vec<String>> {
     let stems = labelled_images(dir).map_err(|error| {
         vec![format!(
             "{}: cannot list the folder: {error}",
@@ -19,19 +33,19 @@ pub(super) fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<Str
     })?;
     let selected: Vec<_> = stems
         .into_iter()
-        .filter(|(stem, _)| args.from.as_ref().is_none_or(|from| stem >= from))
-        .filter(|(stem, _)| args.to.as_ref().is_none_or(|to| stem <= to))
+        .filter(|(stem, _)| from.is_none_or(|from| stem.as_str() >= from))
+        .filter(|(stem, _)| to.is_none_or(|to| stem.as_str() <= to))
         .collect();
     if selected.is_empty() {
         return Err(vec![format!(
             "{}: no NNNNN.jpg images with NNNNN_mask_all.png beside them{}",
             dir.display(),
-            match (&args.from, &args.to) {
+            match (from, to) {
                 (None, None) => String::new(),
                 (from, to) => format!(
                     " between {} and {}",
-                    from.as_deref().unwrap_or("the first"),
-                    to.as_deref().unwrap_or("the last")
+                    from.unwrap_or("the first"),
+                    to.unwrap_or("the last")
                 ),
             }
         )]);
@@ -46,7 +60,7 @@ pub(super) fn load_samples(args: &EvalVisionArgs) -> Result<Vec<Sample>, Vec<Str
         });
         let truth = truth.map_err(|error| format!("{}: {stem}: {error}", dir.display()));
         match (image, truth) {
-            (Ok(image), Ok(truth)) => samples.push(Sample {
+            (Ok(image), Ok(truth)) => samples.push(LabelledImage {
                 stem,
                 path,
                 image,

@@ -1,0 +1,303 @@
+//! Real cables over rendered backgrounds: a labelled photograph's cables,
+//! cut out along their masks and laid over a rendered scene that has no
+//! cables of its own, their labels carried along. No photograph of the
+//! paper's scene is at hand; its cables over rendered paint stand in for
+//! one, with cables that no renderer drew.
+
+use opencv::core::{self, Mat, Scalar, Size};
+use opencv::imgproc;
+use opencv::prelude::*;
+use rand::{Rng, RngExt};
+
+use super::random::MIN_IN_VIEW_DIAGONALS;
+use super::{RenderError, RenderedScene, clip_to_image, cv, unite};
+use crate::perception::vision::paths::polyline_length;
+
+/// The largest scale a photograph is laid over a background at: cables-dev's
+/// wires are 4–8 px wide at 640 px, the paper's cables up to twice that.
+const MAX_SCALE: f64 = 2.0;
+
+/// A labelled photograph: its image and, per cable, its mask and centre
+/// line, as a data set in the cables-dev layout holds them.
+pub struct LabelledPhotograph<'a> {
+    /// CV_8UC3, BGR.
+    pub bgr: &'a Mat,
+    /// CV_8UC1 0/255, the image's size, one per cable.
+    pub masks: &'a [Mat],
+    /// In the image's pixels, one per cable.
+    pub centerlines_px: &'a [Vec<[f64; 2]>],
+}
+
+/// How a photograph is laid over a background: stretched to the
+/// background's size, mirrored, then enlarged about a point. Mirroring and
+/// enlarging keep the view filled, and a cable that left the photograph's
+/// view still leaves the new one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub mirror_x: bool,
+    pub mirror_y: bool,
+    /// At least 1.
+    pub scale: f64,
+    /// The point that stays in place, in the background's pixels.
+    pub centre_px: [f64; 2],
+}
+
+impl Placement {
+    /// A placement drawn from `rng` over a `width_px` × `height_px`
+    /// background: either mirroring, a scale from 1 to [`MAX_SCALE`], a
+    /// centre anywhere in view.
+    pub fn random(rng: &mut impl Rng, width_px: i32, height_px: i32) -> Self {
+        Placement {
+            mirror_x: rng.random_bool(0.5),
+            mirror_y: rng.random_bool(0.5),
+            scale: rng.random_range(1.0..=MAX_SCALE),
+            centre_px: [
+                rng.random_range(0.0..=f64::from(width_px - 1)),
+                rng.random_range(0.0..=f64::from(height_px - 1)),
+            ],
+        }
+    }
+
+    /// The affine map from a `from` photograph's pixels to a `to`
+    /// background's, as OpenCV's 2 × 3 matrix rows.
+    fn matrix(&self, from: Size, to: Size) -> [[f64; 3]; 2] {
+        let axis = |mirror: bool, from: i32, to: i32, centre: f64| {
+            // Pixel centres 0..from-1 onto 0..to-1, mirrored, then scaled
+            // about `centre`: x ↦ a·x + b.
+            let stretch = f64::from(to - 1) / f64::from((from - 1).max(1));
+            let (a, b) = if mirror {
+                (-stretch, f64::from(to - 1))
+            } else {
+                (stretch, 0.0)
+            };
+            (self.scale * a, self.scale * b + (1.0 - self.scale) * centre)
+        };
+        let (ax, bx) = axis(self.mirror_x, from.width, to.width, self.centre_px[0]);
+        let (ay, by) = axis(self.mirror_y, from.height, to.height, self.centre_px[1]);
+        [[ax, 0.0, bx], [0.0, ay, by]]
+    }
+}
+
+/// `background` with `photo`'s cables laid over it by `placement`: each
+/// cable's pixels, the edge of their union softened by a pixel, and the
+/// labels moved with them. A cable left with less in view than a rendered
+/// one may have is not laid over it.
+pub fn paste_cables(
+    background: &Mat,
+    photo: &LabelledPhotograph,
+    placement: &Placement,
+) -> Result<RenderedScene, RenderError> {
+    let to = background
+        .size()
+        .map_err(cv("read the background's size"))?;
+    let from = photo.bgr.size().map_err(cv("read the photograph's size"))?;
+    let m = placement.matrix(from, to);
+    let matrix = Mat::from_slice_2d(&m).map_err(cv("build the placement"))?;
+    let warp = |image: &Mat, interpolation: i32| -> Result<Mat, RenderError> {
+        let mut out = Mat::default();
+        imgproc::warp_affine(
+            image,
+            &mut out,
+            &matrix,
+            to,
+            interpolation,
+            core::BORDER_CONSTANT,
+            Scalar::all(0.0),
+        )
+        .map_err(cv("place the photograph"))?;
+        Ok(out)
+    };
+    let mut masks = Vec::new();
+    let mut centerlines_px = Vec::new();
+    for (mask, line) in photo.masks.iter().zip(photo.centerlines_px) {
+        let mut placed = Mat::default();
+        imgproc::threshold(
+            &warp(mask, imgproc::INTER_LINEAR)?,
+            &mut placed,
+            127.0,
+            255.0,
+            imgproc::THRESH_BINARY,
+        )
+        .map_err(cv("binarize a placed mask"))?;
+        let moved: Vec<[f64; 2]> = line
+            .iter()
+            .map(|p| [m[0][0] * p[0] + m[0][2], m[1][1] * p[1] + m[1][2]])
+            .collect();
+        let line = clip_to_image(&moved, to.width, to.height);
+        let diagonal_px = f64::from(to.width).hypot(f64::from(to.height));
+        let in_view = core::count_non_zero(&placed).map_err(cv("count a placed mask"))?;
+        if in_view > 0 && polyline_length(&line) >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
+            masks.push(placed);
+            centerlines_px.push(line);
+        }
+    }
+    let union_mask = unite(&masks, to.width, to.height)?;
+    let bgr = blend(
+        background,
+        &warp(photo.bgr, imgproc::INTER_LINEAR)?,
+        &union_mask,
+    )?;
+    Ok(RenderedScene {
+        bgr,
+        visible_centerlines_px: centerlines_px.iter().map(|l| vec![l.clone()]).collect(),
+        centerlines_px,
+        visible_masks: masks.clone(),
+        masks,
+        union_mask,
+    })
+}
+
+/// `front` where `mask` is set and `back` elsewhere, the mask's edge
+/// blurred so that the cut shows no seam a network could learn.
+fn blend(back: &Mat, front: &Mat, mask: &Mat) -> Result<Mat, RenderError> {
+    let mut alpha = Mat::default();
+    mask.convert_to(&mut alpha, core::CV_32F, 1.0 / 255.0, 0.0)
+        .map_err(cv("convert the paste's mask"))?;
+    let mut soft = Mat::default();
+    imgproc::gaussian_blur_def(&alpha, &mut soft, Size::new(3, 3), 0.0)
+        .map_err(cv("soften the paste's edge"))?;
+    let mut alpha3 = Mat::default();
+    imgproc::cvt_color_def(&soft, &mut alpha3, imgproc::COLOR_GRAY2BGR)
+        .map_err(cv("spread the paste's mask"))?;
+    let as_float = |image: &Mat| -> Result<Mat, RenderError> {
+        let mut out = Mat::default();
+        image
+            .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
+            .map_err(cv("convert an image to floats"))?;
+        Ok(out)
+    };
+    let (back, front) = (as_float(back)?, as_float(front)?);
+    // back + alpha · (front − back)
+    let mut difference = Mat::default();
+    core::subtract(&front, &back, &mut difference, &core::no_array(), -1)
+        .map_err(cv("blend the paste"))?;
+    let mut weighted = Mat::default();
+    core::multiply(&difference, &alpha3, &mut weighted, 1.0, -1).map_err(cv("blend the paste"))?;
+    let mut blended = Mat::default();
+    core::add(&back, &weighted, &mut blended, &core::no_array(), -1)
+        .map_err(cv("blend the paste"))?;
+    let mut out = Mat::default();
+    blended
+        .convert_to(&mut out, core::CV_8UC3, 1.0, 0.0)
+        .map_err(cv("round the blended image"))?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use opencv::core::{CV_8UC1, CV_8UC3, Point, Vec3b};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    fn filled(rows: i32, cols: i32, typ: i32, value: f64) -> Mat {
+        Mat::new_rows_cols_with_default(rows, cols, typ, Scalar::all(value)).unwrap()
+    }
+
+    /// A 64 × 48 photograph of one white cable, 5 px wide, from the left
+    /// border to (40, 24), on black.
+    fn photograph() -> (Mat, Vec<Mat>, Vec<Vec<[f64; 2]>>) {
+        let mut bgr = filled(48, 64, CV_8UC3, 0.0);
+        let mut mask = filled(48, 64, CV_8UC1, 0.0);
+        for (image, colour) in [(&mut bgr, 255.0), (&mut mask, 255.0)] {
+            imgproc::line(
+                image,
+                Point::new(0, 24),
+                Point::new(40, 24),
+                Scalar::all(colour),
+                5,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        (bgr, vec![mask], vec![vec![[0.0, 24.0], [40.0, 24.0]]])
+    }
+
+    #[test]
+    fn the_cable_moves_with_its_labels_and_the_background_shows_around_it() {
+        let (bgr, masks, lines) = photograph();
+        let photo = LabelledPhotograph {
+            bgr: &bgr,
+            masks: &masks,
+            centerlines_px: &lines,
+        };
+        let background = filled(48, 64, CV_8UC3, 100.0);
+        let placement = Placement {
+            mirror_x: true,
+            mirror_y: false,
+            scale: 1.0,
+            centre_px: [0.0, 0.0],
+        };
+        let scene = paste_cables(&background, &photo, &placement).unwrap();
+
+        // Mirrored left for right: the cable now runs in from the right
+        // border, and its label with it.
+        assert_eq!(scene.centerlines_px, vec![vec![[63.0, 24.0], [23.0, 24.0]]]);
+        let mask = &scene.masks[0];
+        assert_eq!(*mask.at_2d::<u8>(24, 60).unwrap(), 255);
+        assert_eq!(*mask.at_2d::<u8>(24, 5).unwrap(), 0);
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(24, 50).unwrap(), Vec3b::all(255));
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(10, 50).unwrap(), Vec3b::all(100));
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(24, 5).unwrap(), Vec3b::all(100));
+    }
+
+    #[test]
+    fn an_enlarged_photograph_keeps_its_cable_leaving_the_view_and_drops_one_out_of_it() {
+        let (bgr, mut masks, mut lines) = photograph();
+        // A second cable, a dot in the lower right corner.
+        let mut corner = filled(48, 64, CV_8UC1, 0.0);
+        imgproc::circle(
+            &mut corner,
+            Point::new(60, 44),
+            2,
+            Scalar::all(255.0),
+            -1,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        masks.push(corner);
+        lines.push(vec![[59.0, 44.0], [61.0, 44.0]]);
+        let photo = LabelledPhotograph {
+            bgr: &bgr,
+            masks: &masks,
+            centerlines_px: &lines,
+        };
+        let background = filled(48, 64, CV_8UC3, 100.0);
+        // Twice as large about the cable's end: the corner's dot leaves
+        // the view, the cable still runs in from the left border.
+        let placement = Placement {
+            mirror_x: false,
+            mirror_y: false,
+            scale: 2.0,
+            centre_px: [40.0, 24.0],
+        };
+        let scene = paste_cables(&background, &photo, &placement).unwrap();
+        assert_eq!(scene.masks.len(), 1);
+        let line = &scene.centerlines_px[0];
+        assert_eq!(line.first(), Some(&[0.0, 24.0]));
+        assert_eq!(line.last(), Some(&[40.0, 24.0]));
+        // Ten pixels wide now.
+        assert_eq!(*scene.masks[0].at_2d::<u8>(20, 20).unwrap(), 255);
+        assert_eq!(*scene.masks[0].at_2d::<u8>(16, 20).unwrap(), 0);
+    }
+
+    #[test]
+    fn random_placements_fill_the_view() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..50 {
+            let p = Placement::random(&mut rng, 640, 480);
+            assert!((1.0..=MAX_SCALE).contains(&p.scale));
+            let m = p.matrix(Size::new(640, 480), Size::new(640, 480));
+            // The photograph's corners land on or beyond the view's.
+            let xs = [m[0][2], m[0][0] * 639.0 + m[0][2]];
+            let ys = [m[1][2], m[1][1] * 479.0 + m[1][2]];
+            assert!(xs.iter().cloned().fold(f64::MAX, f64::min) <= 1e-9);
+            assert!(xs.iter().cloned().fold(f64::MIN, f64::max) >= 639.0 - 1e-9);
+            assert!(ys.iter().cloned().fold(f64::MAX, f64::min) <= 1e-9);
+            assert!(ys.iter().cloned().fold(f64::MIN, f64::max) >= 479.0 - 1e-9);
+        }
+    }
+}
