@@ -215,22 +215,33 @@ mod tests {
         (bgr, vec![mask], vec![vec![[0.0, 24.0], [40.0, 24.0]]])
     }
 
+    /// The photograph `bgr` with its cables' `masks` and `lines` laid by
+    /// `placement` over a grey background of its size.
+    fn over_grey(
+        bgr: &Mat,
+        masks: &[Mat],
+        lines: &[Vec<[f64; 2]>],
+        placement: &Placement,
+    ) -> RenderedScene {
+        let photo = LabelledPhotograph {
+            bgr,
+            masks,
+            centerlines_px: lines,
+        };
+        let background = filled(bgr.rows(), bgr.cols(), CV_8UC3, 100.0);
+        paste_cables(&background, &photo, placement).unwrap()
+    }
+
     #[test]
     fn the_cable_moves_with_its_labels_and_the_background_shows_around_it() {
         let (bgr, masks, lines) = photograph();
-        let photo = LabelledPhotograph {
-            bgr: &bgr,
-            masks: &masks,
-            centerlines_px: &lines,
-        };
-        let background = filled(48, 64, CV_8UC3, 100.0);
         let placement = Placement {
             mirror_x: true,
             mirror_y: false,
             scale: 1.0,
             centre_px: [0.0, 0.0],
         };
-        let scene = paste_cables(&background, &photo, &placement).unwrap();
+        let scene = over_grey(&bgr, &masks, &lines, &placement);
 
         // Mirrored left for right: the cable now runs in from the right
         // border, and its label with it.
@@ -260,12 +271,6 @@ mod tests {
         .unwrap();
         masks.push(corner);
         lines.push(vec![[59.0, 44.0], [61.0, 44.0]]);
-        let photo = LabelledPhotograph {
-            bgr: &bgr,
-            masks: &masks,
-            centerlines_px: &lines,
-        };
-        let background = filled(48, 64, CV_8UC3, 100.0);
         // Twice as large about the cable's end: the corner's dot leaves
         // the view, the cable still runs in from the left border.
         let placement = Placement {
@@ -274,7 +279,7 @@ mod tests {
             scale: 2.0,
             centre_px: [40.0, 24.0],
         };
-        let scene = paste_cables(&background, &photo, &placement).unwrap();
+        let scene = over_grey(&bgr, &masks, &lines, &placement);
         assert_eq!(scene.masks.len(), 1);
         let line = &scene.centerlines_px[0];
         assert_eq!(line.first(), Some(&[0.0, 24.0]));
