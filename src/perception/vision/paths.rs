@@ -283,24 +283,31 @@ pub(super) fn median(values: &mut [f64]) -> Option<f64> {
     values.get(values.len() / 2).copied()
 }
 
-/// The colour of a BGR image under `points` (pixel centres inside it), in
-/// OpenCV's 8-bit Lab: the per-channel median, which a glint or a speck
-/// of the background does not move. `None` for no points.
+/// The colour of a BGR image under those of `points` whose pixel lies
+/// inside it (a path's end may round to a row or column past the
+/// border), in OpenCV's 8-bit Lab: the per-channel median, which a glint
+/// or a speck of the background does not move. `None` for no such points.
 pub(super) fn median_colour_lab(
     image: &Mat,
     points: &[[f64; 2]],
 ) -> Result<Option<[f64; 3]>, VisionError> {
-    if points.is_empty() {
-        return Ok(None);
-    }
     let mut channels = [Vec::new(), Vec::new(), Vec::new()];
     for p in points {
+        let (x, y) = (p[0].round(), p[1].round());
+        if !((0.0..f64::from(image.cols())).contains(&x)
+            && (0.0..f64::from(image.rows())).contains(&y))
+        {
+            continue;
+        }
         let bgr = image
-            .at_2d::<Vec3b>(p[1].round() as i32, p[0].round() as i32)
+            .at_2d::<Vec3b>(y as i32, x as i32)
             .map_err(cv("a cable's colour"))?;
         for (channel, value) in channels.iter_mut().zip(bgr.0) {
             channel.push(value);
         }
+    }
+    if channels[0].is_empty() {
+        return Ok(None);
     }
     let median = [Vec3b::from(channels.map(|mut c| {
         c.sort_unstable();
@@ -584,6 +591,22 @@ mod tests {
             let found = join_continuations(paths, Some(&image), 8.0).unwrap();
             assert_eq!(found.len(), pieces);
         }
+    }
+
+    #[test]
+    fn a_colour_is_read_only_under_points_inside_the_image() {
+        let blue = Scalar::new(200.0, 60.0, 30.0, 0.0);
+        let image = Mat::new_rows_cols_with_default(10, 10, CV_8UC3, blue).unwrap();
+        let inside = median_colour_lab(&image, &[[0.0, 0.0], [9.0, 9.0]]).unwrap();
+        // A path's end that rounds to row -1 or column 10 is left out.
+        let with_outside =
+            median_colour_lab(&image, &[[0.0, -0.6], [0.0, 0.0], [9.0, 9.0], [9.6, 5.0]]).unwrap();
+        assert!(inside.is_some());
+        assert_eq!(with_outside, inside);
+        assert_eq!(
+            median_colour_lab(&image, &[[-1.0, 4.0], [4.0, 10.0]]).unwrap(),
+            None
+        );
     }
 
     /// A 640 × 480 mask's border cut at 6 px, directions over 16 px.
