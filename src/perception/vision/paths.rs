@@ -283,6 +283,13 @@ pub(super) fn median(values: &mut [f64]) -> Option<f64> {
     values.get(values.len() / 2).copied()
 }
 
+/// The pixel (row, column) of `image` that `p` rounds to, if inside it.
+pub(super) fn pixel_in(image: &Mat, p: [f64; 2]) -> Option<(i32, i32)> {
+    let (x, y) = (p[0].round(), p[1].round());
+    ((0.0..f64::from(image.cols())).contains(&x) && (0.0..f64::from(image.rows())).contains(&y))
+        .then_some((y as i32, x as i32))
+}
+
 /// The colour of a BGR image under those of `points` whose pixel lies
 /// inside it (a path's end may round to a row or column past the
 /// border), in OpenCV's 8-bit Lab: the per-channel median, which a glint
@@ -292,15 +299,9 @@ pub(super) fn median_colour_lab(
     points: &[[f64; 2]],
 ) -> Result<Option<[f64; 3]>, VisionError> {
     let mut channels = [Vec::new(), Vec::new(), Vec::new()];
-    for p in points {
-        let (x, y) = (p[0].round(), p[1].round());
-        if !((0.0..f64::from(image.cols())).contains(&x)
-            && (0.0..f64::from(image.rows())).contains(&y))
-        {
-            continue;
-        }
+    for (row, col) in points.iter().filter_map(|&p| pixel_in(image, p)) {
         let bgr = image
-            .at_2d::<Vec3b>(y as i32, x as i32)
+            .at_2d::<Vec3b>(row, col)
             .map_err(cv("a cable's colour"))?;
         for (channel, value) in channels.iter_mut().zip(bgr.0) {
             channel.push(value);

@@ -94,15 +94,9 @@ fn sides_alike(
     points_px: &[[f64; 2]],
     width_px: f64,
 ) -> Result<bool, VisionError> {
-    let in_image = |p: &[f64; 2]| {
-        (0.0..f64::from(image.cols())).contains(&p[0].round())
-            && (0.0..f64::from(image.rows())).contains(&p[1].round())
-    };
     let in_background = |p: [f64; 2]| {
-        in_image(&p)
-            && mask
-                .at_2d::<u8>(p[1].round() as i32, p[0].round() as i32)
-                .is_ok_and(|&v| v == 0)
+        paths::pixel_in(image, p)
+            .is_some_and(|(row, col)| mask.at_2d::<u8>(row, col).is_ok_and(|&v| v == 0))
     };
     let mut sides = [Vec::new(), Vec::new()];
     for w in points_px.windows(3) {
@@ -122,12 +116,11 @@ fn sides_alike(
             }
         }
     }
-    let on_image: Vec<[f64; 2]> = points_px.iter().copied().filter(in_image).collect();
     let [left, right] = &sides;
     let colours = (
         paths::median_colour_lab(image, left)?,
         paths::median_colour_lab(image, right)?,
-        paths::median_colour_lab(image, &on_image)?,
+        paths::median_colour_lab(image, points_px)?,
     );
     let (Some(left), Some(right), Some(middle)) = colours else {
         return Ok(false);
