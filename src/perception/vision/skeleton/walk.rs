@@ -10,7 +10,7 @@ use opencv::prelude::*;
 
 use super::direction::direction_stretch;
 use super::graph::{Branch, Graph, NodeKind};
-use crate::perception::vision::paths::{angle_rad, unit};
+use crate::perception::vision::paths::{angle_rad, pixel_in, unit};
 use crate::perception::vision::spline::arc_lengths_px;
 
 /// Skeleton pixels this many widths either side of a crossing are left out
@@ -144,10 +144,7 @@ fn bridge(before: &[[f64; 2]], after: &[[f64; 2]], span: usize) -> Vec<[f64; 2]>
 
 /// Whether the pixel nearest `p` is in `mask` (CV_8U) and set.
 fn on_mask(mask: &Mat, p: [f64; 2]) -> bool {
-    let (x, y) = (p[0].round(), p[1].round());
-    (0.0..f64::from(mask.cols())).contains(&x)
-        && (0.0..f64::from(mask.rows())).contains(&y)
-        && mask.at_2d::<u8>(y as i32, x as i32).is_ok_and(|&v| v != 0)
+    pixel_in(mask, p).is_some_and(|(row, col)| mask.at_2d::<u8>(row, col).is_ok_and(|&v| v != 0))
 }
 
 /// `path` cut at each corner sharper than [`CORNER_TURN_RAD`]: where its
