@@ -2,10 +2,10 @@
 """Averages the weights of float cable segmentation networks, then quantizes the average.
 
 Networks fine-tuned from one another lie close enough in weight space that
-their average is a network too, and often a better one than any of them:
-the network shipped now is the average of three (models/README.md, "The
-network shipped now"). The networks must have the same layers; train_segmentation.py
-writes them as NAME_float.onnx. Run from the project's root, e.g.
+their average is a network too, and often a better one than any of them
+(models/README.md says which shipped networks were made so). The networks
+must have the same layers; train_segmentation.py writes them as
+NAME_float.onnx. Run from the project's root, e.g.
     .venv-train/bin/python models/average_segmentation.py A_float.onnx B_float.onnx \
         --out models/cable_segmentation.onnx
 It writes the float average beside OUT, as OUT_STEM_float.onnx, and the
