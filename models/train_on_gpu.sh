@@ -30,13 +30,15 @@ common=(--device "${DEVICE:-cuda}" --workers "${WORKERS:-7}" --batch "${BATCH:-6
     --data $pack/cables-dev --synthetic $pack/render-train $pack/render-workbench $pack/render-dark2
     --busy $pack/render-busy4 $pack/render-busy5 $pack/render-ptrain $pack/render-ptrain2
     --init models/cable_segmentation_float.onnx --paste-fraction 0.5)
-mkdir -p "$OUT/a" "$OUT/b"
-PYTHONUNBUFFERED=1 "$py" models/train_segmentation.py "${common[@]}" --lr "${LR_A:-3e-4}" \
-    --real-fraction 0.3 --busy-fraction 0.45 --seed "${SEED_A:-80}" \
-    --out "$OUT/a/cable_segmentation.onnx" >"$OUT/a/train.log" 2>&1 &
-PYTHONUNBUFFERED=1 "$py" models/train_segmentation.py "${common[@]}" --lr "${LR_B:-2e-4}" \
-    --real-fraction 0.25 --busy-fraction 0.55 --seed "${SEED_B:-81}" \
-    --out "$OUT/b/cable_segmentation.onnx" >"$OUT/b/train.log" 2>&1 &
+# One run in the background: NAME LR REAL_FRACTION BUSY_FRACTION SEED.
+run() {
+    mkdir -p "$OUT/$1"
+    PYTHONUNBUFFERED=1 "$py" models/train_segmentation.py "${common[@]}" --lr "$2" \
+        --real-fraction "$3" --busy-fraction "$4" --seed "$5" \
+        --out "$OUT/$1/cable_segmentation.onnx" >"$OUT/$1/train.log" 2>&1 &
+}
+run a "${LR_A:-3e-4}" 0.3 0.45 "${SEED_A:-80}"
+run b "${LR_B:-2e-4}" 0.25 0.55 "${SEED_B:-81}"
 wait -n; first=$?
 wait -n; second=$?
 grep -h "steps fit\|training took\|exported\|threshold 0.5\|Error" "$OUT/a/train.log" "$OUT/b/train.log"
