@@ -441,6 +441,15 @@ fn add_noise(image: &mut Mat, sigma: f64, rng: &mut impl Rng) -> Result<(), Rend
 /// The longest stretch of `points` inside the image (pixel centres from 0
 /// to size − 1), cut where it crosses the border.
 fn clip_to_image(points: &[[f64; 2]], width: i32, height: i32) -> Vec<[f64; 2]> {
+    stretches_in_image(points, width, height)
+        .into_iter()
+        .max_by(|a, b| polyline_length(a).total_cmp(&polyline_length(b)))
+        .unwrap_or_default()
+}
+
+/// Each stretch of `points` inside the image (pixel centres from 0 to
+/// size − 1), in order along them, cut where they cross the border.
+fn stretches_in_image(points: &[[f64; 2]], width: i32, height: i32) -> Vec<Vec<[f64; 2]>> {
     let (max_x, max_y) = (f64::from(width - 1), f64::from(height - 1));
     let mut runs: Vec<Vec<[f64; 2]>> = Vec::new();
     let mut continues = false;
@@ -461,9 +470,7 @@ fn clip_to_image(points: &[[f64; 2]], width: i32, height: i32) -> Vec<[f64; 2]> 
         }
         continues = t1 == 1.0;
     }
-    runs.into_iter()
-        .max_by(|a, b| polyline_length(a).total_cmp(&polyline_length(b)))
-        .unwrap_or_default()
+    runs
 }
 
 /// The part of the segment from `a` to `b` inside [0, max_x] × [0, max_y],
@@ -503,7 +510,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn clipping_keeps_the_longest_stretch_inside_and_cuts_at_the_border() {
+    fn clipping_finds_each_stretch_inside_keeps_the_longest_and_cuts_at_the_border() {
         let points = [[-10.0, 5.0], [50.0, 5.0], [120.0, 5.0], [150.0, 5.0]];
         let clipped = clip_to_image(&points, 100, 20);
         assert_eq!(clipped, vec![[0.0, 5.0], [50.0, 5.0], [99.0, 5.0]]);
@@ -517,6 +524,13 @@ mod tests {
         ];
         let clipped = clip_to_image(&points, 100, 20);
         assert_eq!(clipped, vec![[30.0, 0.0], [30.0, 5.0], [90.0, 5.0]]);
+        assert_eq!(
+            stretches_in_image(&points, 100, 20),
+            vec![
+                vec![[10.0, 5.0], [10.0, 0.0]],
+                vec![[30.0, 0.0], [30.0, 5.0], [90.0, 5.0]]
+            ]
+        );
         assert!(clip_to_image(&[[-5.0, -5.0], [-1.0, -9.0]], 100, 20).is_empty());
     }
 

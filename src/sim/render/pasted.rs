@@ -10,7 +10,8 @@ use opencv::prelude::*;
 use rand::{Rng, RngExt};
 
 use super::random::MIN_IN_VIEW_DIAGONALS;
-use super::{RenderError, RenderedScene, clip_to_image, cv, unite};
+use super::{RenderError, RenderedScene, cv, stretches_in_image, unite};
+use crate::perception::vision::eval::distance_to_polylines;
 use crate::perception::vision::paths::polyline_length;
 
 /// The largest scale a photograph is laid over a background at: cables-dev's
@@ -80,8 +81,10 @@ impl Placement {
 
 /// `background` with `photo`'s cables laid over it by `placement`: each
 /// cable's pixels, the edge of their union softened by a pixel, and the
-/// labels moved with them. A cable left with less in view than a rendered
-/// one may have is not laid over it.
+/// labels moved with them. A cable that leaves the enlarged view and comes
+/// back shows the camera one cable a stretch in view, so each stretch is
+/// labelled as one. A stretch with less in view than a rendered cable may
+/// have is not laid over it.
 pub fn paste_cables(
     background: &Mat,
     photo: &LabelledPhotograph,
@@ -123,12 +126,15 @@ pub fn paste_cables(
             .iter()
             .map(|p| [m[0][0] * p[0] + m[0][2], m[1][1] * p[1] + m[1][2]])
             .collect();
-        let line = clip_to_image(&moved, to.width, to.height);
+        let stretches = stretches_in_image(&moved, to.width, to.height);
         let diagonal_px = f64::from(to.width).hypot(f64::from(to.height));
-        let in_view = core::count_non_zero(&placed).map_err(cv("count a placed mask"))?;
-        if in_view > 0 && polyline_length(&line) >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
-            masks.push(placed);
-            centerlines_px.push(line);
+        let parts = split_by_nearest(placed, &stretches)?;
+        for (stretch, mask) in joined_where_touching(stretches, parts)? {
+            let in_view = core::count_non_zero(&mask).map_err(cv("count a placed mask"))?;
+            if in_view > 0 && polyline_length(&stretch) >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
+                masks.push(mask);
+                centerlines_px.push(stretch);
+            }
         }
     }
     let union_mask = unite(&masks, to.width, to.height)?;
@@ -145,6 +151,69 @@ pub fn paste_cables(
         masks,
         union_mask,
     })
+}
+
+/// `mask` (CV_8UC1 0/255) parted among `lines`: one mask a line, each of
+/// its pixels in the mask of the line nearest to it.
+fn split_by_nearest(mask: Mat, lines: &[Vec<[f64; 2]>]) -> Result<Vec<Mat>, RenderError> {
+    match lines.len() {
+        0 => return Ok(Vec::new()),
+        1 => return Ok(vec![mask]),
+        _ => {}
+    }
+    let mut pixels = core::Vector::<core::Point>::new();
+    core::find_non_zero(&mask, &mut pixels).map_err(cv("find a placed mask's pixels"))?;
+    let mut parts = Vec::with_capacity(lines.len());
+    for _ in lines {
+        parts.push(
+            Mat::new_rows_cols_with_default(mask.rows(), mask.cols(), core::CV_8UC1, 0.into())
+                .map_err(cv("allocate a mask"))?,
+        );
+    }
+    for pixel in pixels {
+        let at = [f64::from(pixel.x), f64::from(pixel.y)];
+        let nearest = (0..lines.len())
+            .map(|k| (k, distance_to_polylines(at, &lines[k..=k])))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(k, _)| k);
+        *parts[nearest]
+            .at_2d_mut::<u8>(pixel.y, pixel.x)
+            .map_err(cv("part a placed mask"))? = 255;
+    }
+    Ok(parts)
+}
+
+/// Consecutive stretches of one cable, each with its part of the mask,
+/// joined where their parts touch: a cable that grazes the border leaves
+/// the view for less than its width, and the camera sees it whole.
+fn joined_where_touching(
+    stretches: Vec<Vec<[f64; 2]>>,
+    parts: Vec<Mat>,
+) -> Result<Vec<(Vec<[f64; 2]>, Mat)>, RenderError> {
+    let mut joined: Vec<(Vec<[f64; 2]>, Mat)> = Vec::new();
+    for (stretch, part) in stretches.into_iter().zip(parts) {
+        match joined.last_mut() {
+            Some((line, mask)) if touch(mask, &part)? => {
+                line.extend(stretch);
+                let mut both = Mat::default();
+                core::bitwise_or(&*mask, &part, &mut both, &core::no_array())
+                    .map_err(cv("join two stretches' masks"))?;
+                *mask = both;
+            }
+            _ => joined.push((stretch, part)),
+        }
+    }
+    Ok(joined)
+}
+
+/// Whether masks `a` and `b` share a pixel or touch at an edge or corner.
+fn touch(a: &Mat, b: &Mat) -> Result<bool, RenderError> {
+    let mut grown = Mat::default();
+    imgproc::dilate_def(a, &mut grown, &Mat::default()).map_err(cv("grow a mask"))?;
+    let mut shared = Mat::default();
+    core::bitwise_and(&grown, b, &mut shared, &core::no_array())
+        .map_err(cv("overlap two masks"))?;
+    Ok(core::count_non_zero(&shared).map_err(cv("count shared pixels"))? > 0)
 }
 
 /// `front` where `mask` is set and `back` elsewhere, the mask's edge
@@ -287,6 +356,77 @@ mod tests {
         // Ten pixels wide now.
         assert_eq!(*scene.masks[0].at_2d::<u8>(20, 20).unwrap(), 255);
         assert_eq!(*scene.masks[0].at_2d::<u8>(16, 20).unwrap(), 0);
+    }
+
+    #[test]
+    fn a_cable_that_leaves_the_enlarged_view_and_comes_back_is_labelled_once_a_piece_the_camera_sees()
+     {
+        // An arch: up the left arm from (20, 44), across at y = 4, down the
+        // right arm to (44, 26), 5 px wide, white on black.
+        let line = vec![[20.0, 44.0], [20.0, 4.0], [44.0, 4.0], [44.0, 26.0]];
+        let points: core::Vector<Point> = line
+            .iter()
+            .map(|p| Point::new(p[0] as i32, p[1] as i32))
+            .collect();
+        let mut bgr = filled(48, 64, CV_8UC3, 0.0);
+        let mut mask = filled(48, 64, CV_8UC1, 0.0);
+        for image in [&mut bgr, &mut mask] {
+            imgproc::polylines(
+                image,
+                &points,
+                false,
+                Scalar::all(255.0),
+                5,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        let masks = vec![mask];
+        let lines = vec![line];
+        let enlarged_about = |centre_y: f64| Placement {
+            mirror_x: false,
+            mirror_y: false,
+            scale: 2.0,
+            centre_px: [30.0, centre_y],
+        };
+
+        // About (30, 40) the arch's top leaves the view: each arm is a
+        // cable to the camera, x = 10 and x = 58, with its own pixels.
+        let scene = over_grey(&bgr, &masks, &lines, &enlarged_about(40.0));
+        assert_eq!(
+            scene.centerlines_px,
+            vec![
+                vec![[10.0, 47.0], [10.0, 0.0]],
+                vec![[58.0, 0.0], [58.0, 12.0]]
+            ]
+        );
+        let at = |mask: &Mat, x: i32, y: i32| *mask.at_2d::<u8>(y, x).unwrap();
+        assert_eq!(
+            (at(&scene.masks[0], 10, 5), at(&scene.masks[0], 58, 5)),
+            (255, 0)
+        );
+        assert_eq!(
+            (at(&scene.masks[1], 10, 5), at(&scene.masks[1], 58, 5)),
+            (0, 255)
+        );
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(5, 58).unwrap(), Vec3b::all(255));
+
+        // About (30, 46) the right arm shows 6 px, less than a rendered
+        // cable may: neither labelled nor laid over the background.
+        let scene = over_grey(&bgr, &masks, &lines, &enlarged_about(46.0));
+        assert_eq!(scene.centerlines_px, vec![vec![[10.0, 42.0], [10.0, 0.0]]]);
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(3, 58).unwrap(), Vec3b::all(100));
+        assert_eq!(*scene.bgr.at_2d::<Vec3b>(20, 10).unwrap(), Vec3b::all(255));
+
+        // About (30, 11) the arch's top runs 3 px beyond the border, its
+        // pixels still in view: one cable, as the camera sees it.
+        let scene = over_grey(&bgr, &masks, &lines, &enlarged_about(11.0));
+        assert_eq!(
+            scene.centerlines_px,
+            vec![vec![[10.0, 47.0], [10.0, 0.0], [58.0, 0.0], [58.0, 41.0]]]
+        );
+        assert_eq!(at(&scene.masks[0], 34, 1), 255);
     }
 
     #[test]
