@@ -129,11 +129,12 @@ pub fn paste_cables(
         let stretches = stretches_in_image(&moved, to.width, to.height);
         let diagonal_px = f64::from(to.width).hypot(f64::from(to.height));
         let parts = split_by_nearest(placed, &stretches)?;
-        for (stretch, mask) in joined_where_touching(stretches, parts)? {
-            let in_view = core::count_non_zero(&mask).map_err(cv("count a placed mask"))?;
-            if in_view > 0 && polyline_length(&stretch) >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
-                masks.push(mask);
-                centerlines_px.push(stretch);
+        for piece in joined_where_touching(stretches, parts)? {
+            let in_view = core::count_non_zero(&piece.mask).map_err(cv("count a placed mask"))?;
+            let long_px = polyline_length(&piece.centerline_px);
+            if in_view > 0 && long_px >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
+                masks.push(piece.mask);
+                centerlines_px.push(piece.centerline_px);
             }
         }
     }
@@ -183,24 +184,34 @@ fn split_by_nearest(mask: Mat, lines: &[Vec<[f64; 2]>]) -> Result<Vec<Mat>, Rend
     Ok(parts)
 }
 
+/// What the camera sees of a cable in one piece.
+struct InView {
+    centerline_px: Vec<[f64; 2]>,
+    /// CV_8UC1 0/255.
+    mask: Mat,
+}
+
 /// Consecutive stretches of one cable, each with its part of the mask,
 /// joined where their parts touch: a cable that grazes the border leaves
 /// the view for less than its width, and the camera sees it whole.
 fn joined_where_touching(
     stretches: Vec<Vec<[f64; 2]>>,
     parts: Vec<Mat>,
-) -> Result<Vec<(Vec<[f64; 2]>, Mat)>, RenderError> {
-    let mut joined: Vec<(Vec<[f64; 2]>, Mat)> = Vec::new();
+) -> Result<Vec<InView>, RenderError> {
+    let mut joined: Vec<InView> = Vec::new();
     for (stretch, part) in stretches.into_iter().zip(parts) {
         match joined.last_mut() {
-            Some((line, mask)) if touch(mask, &part)? => {
-                line.extend(stretch);
+            Some(piece) if touch(&piece.mask, &part)? => {
+                piece.centerline_px.extend(stretch);
                 let mut both = Mat::default();
-                core::bitwise_or(&*mask, &part, &mut both, &core::no_array())
+                core::bitwise_or(&piece.mask, &part, &mut both, &core::no_array())
                     .map_err(cv("join two stretches' masks"))?;
-                *mask = both;
+                piece.mask = both;
             }
-            _ => joined.push((stretch, part)),
+            _ => joined.push(InView {
+                centerline_px: stretch,
+                mask: part,
+            }),
         }
     }
     Ok(joined)
