@@ -131,8 +131,8 @@ pub fn paste_cables(
         let parts = split_by_nearest(placed, &stretches)?;
         for piece in joined_where_touching(stretches, parts)? {
             let in_view = core::count_non_zero(&piece.mask).map_err(cv("count a placed mask"))?;
-            let long_px = polyline_length(&piece.centerline_px);
-            if in_view > 0 && long_px >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
+            let length_px = polyline_length(&piece.centerline_px);
+            if in_view > 0 && length_px >= MIN_IN_VIEW_DIAGONALS * diagonal_px {
                 masks.push(piece.mask);
                 centerlines_px.push(piece.centerline_px);
             }
@@ -370,8 +370,7 @@ mod tests {
     }
 
     #[test]
-    fn a_cable_that_leaves_the_enlarged_view_and_comes_back_is_labelled_once_a_piece_the_camera_sees()
-     {
+    fn a_cable_that_comes_back_into_view_is_labelled_once_a_piece_in_view() {
         // An arch: up the left arm from (20, 44), across at y = 4, down the
         // right arm to (44, 26), 5 px wide, white on black.
         let line = vec![[20.0, 44.0], [20.0, 4.0], [44.0, 4.0], [44.0, 26.0]];
