@@ -268,16 +268,31 @@ def load_cutouts(data: Path, ids: list[int]) -> list[tuple[np.ndarray, np.ndarra
     return cutouts
 
 
+def made_pale(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> np.ndarray:
+    """A cut-out cable turned white or pale grey, its sheen and shading
+    kept: the training photographs hold few such cables (about one in
+    eleven), and a light one over light paint is what the network misses
+    most (models/README.md, "Pale cables")."""
+    gray = patch.astype(np.float32).mean(axis=2, keepdims=True)
+    mean = float(gray[pm > 0.5].mean()) if (pm > 0.5).any() else float(gray.mean())
+    pale = rng.uniform(165, 240) + (gray - mean) * rng.uniform(0.5, 1.2) + rng.uniform(-10, 10, 3)
+    return np.clip(pale, 0, 255).astype(np.uint8)
+
+
 def paste_cables(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray,
-                 cutouts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+                 cutouts: list[tuple[np.ndarray, np.ndarray]],
+                 pale_fraction: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """`img` with one to four real cables pasted over it, each scaled (the
     paper's cables are up to 2.5 times as thick as cables-dev's), rotated,
-    shaded and blurred like the scene, its mask added to the labels."""
+    shaded and blurred like the scene (`pale_fraction` of them made pale),
+    its mask added to the labels."""
     h, w = mask.shape
     img = img.astype(np.float32)
     mask = mask.copy()
     for _ in range(rng.integers(1, 5)):
         patch, pm = cutouts[rng.integers(0, len(cutouts))]
+        if pale_fraction > 0 and rng.random() < pale_fraction:
+            patch = made_pale(rng, patch, pm)
         s = rng.uniform(1.0, 2.6)
         a = rng.uniform(-180, 180)
         ph, pw = pm.shape
@@ -440,7 +455,7 @@ def make_batch(rng, real, synth, busy, cutouts, args, model):
             j = rng.integers(0, len(source[0]))
             img, m = source[0][j], source[1][j]
             if source is busy and cutouts and rng.random() < args.paste_fraction:
-                img, m = paste_cables(rng, img, m, cutouts)
+                img, m = paste_cables(rng, img, m, cutouts, args.pale_fraction)
             if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
                 img = recolour_background(rng, img, m)
             candidates.append(augment(rng, img, m, args.crop, tuple(args.scales)))
@@ -740,6 +755,9 @@ def main() -> int:
     parser.add_argument("--busy-fraction", type=float, default=0.3, help="share of busy rendered images in a batch")
     parser.add_argument("--paste-fraction", type=float, default=0.5,
                         help="share of busy images that get real cables pasted over them")
+    parser.add_argument("--pale-fraction", type=float, default=0.0,
+                        help="share of pasted cables made white or pale grey (made_pale; models/README.md, "
+                             "\"Pale cables\")")
     parser.add_argument("--checkpoint-every", type=int, default=200,
                         help="steps between checkpoints (OUT_STEM.checkpoint.pt beside the model)")
     parser.add_argument("--init", type=Path,
