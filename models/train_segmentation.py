@@ -271,7 +271,7 @@ def load_cutouts(data: Path, ids: list[int]) -> list[tuple[np.ndarray, np.ndarra
 def made_pale(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> np.ndarray:
     """A cut-out cable turned white or pale grey, its sheen and shading
     kept: the training photographs hold few such cables (about one in
-    eleven), and a light one over light paint is what the network misses
+    twelve), and a light one over light paint is what the network misses
     most (models/README.md, "Pale cables")."""
     gray = patch.astype(np.float32).mean(axis=2, keepdims=True)
     mean = float(gray[pm > 0.5].mean()) if (pm > 0.5).any() else float(gray.mean())
