@@ -44,13 +44,13 @@ def main() -> int:
             return 2
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
         missed = {m["index"] for m in image["missed"]}
-        for path in sorted(args.folder.glob(f"{name}_mask_[0-9]*.png")):
+        # The labels as eval-vision reads them: NAME_mask_0.png, _1, ... while they exist.
+        index = 0
+        while (path := args.folder / f"{name}_mask_{index}.png").exists():
             mask = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE) > 127
-            if not mask.any():
-                continue
-            index = int(path.stem.rsplit("_", 1)[1])
-            kind = 0 if is_pale(hsv, mask) else 1
-            counts[kind] += (1, index in missed)
+            if mask.any():
+                counts[0 if is_pale(hsv, mask) else 1] += (1, index in missed)
+            index += 1
     for kind, (labels, missed) in zip(("pale", "other"), counts):
         share = 100 * missed / labels if labels else 0.0
         print(f"{kind}: {labels} labels, {missed} missed ({share:.1f} %)")

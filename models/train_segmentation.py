@@ -274,7 +274,7 @@ def made_pale(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> np
     twelve), and a light one over light paint is what the network misses
     most (models/README.md, "Pale cables")."""
     gray = patch.astype(np.float32).mean(axis=2, keepdims=True)
-    mean = float(gray[pm > 0.5].mean()) if (pm > 0.5).any() else float(gray.mean())
+    mean = float(gray[pm > 0.5].mean())  # load_cutouts keeps cutouts of 30 px or more
     pale = rng.uniform(165, 240) + (gray - mean) * rng.uniform(0.5, 1.2) + rng.uniform(-10, 10, 3)
     return np.clip(pale, 0, 255).astype(np.uint8)
 
