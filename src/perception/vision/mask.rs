@@ -74,6 +74,20 @@ pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 /// backgrounds too").
 pub const CLOSE_MAX_NEAR_FRACTION: f64 = 0.5;
 
+/// The network also looks closer at a background that is not plain where
+/// at least this share of the pixels lie on an edge ([`EDGE_THRESHOLDS`]):
+/// paint on a bare canvas, whose broad stretches of one colour put it
+/// above [`CLOSE_MAX_NEAR_FRACTION`], is dense with edges; a table, a cloth
+/// or paper with cables on it is not (docs/vision-record.md, "Paint on a
+/// bare canvas looked at closer").
+pub const CLOSE_MIN_EDGE_FRACTION: f64 = 0.08;
+
+/// Canny's two thresholds on the plain test's lightness (8-bit, L·255/100)
+/// for [`CLOSE_MIN_EDGE_FRACTION`]: OpenCV's common 1 : 3, at a step that
+/// a stroke of paint or a cable's outline makes and a table's grain does
+/// not.
+const EDGE_THRESHOLDS: [f64; 2] = [50.0, 150.0];
+
 /// A background whose median lightness (8-bit CIELAB, L·255/100) is under
 /// this is dark: black cloth, a dark table (L* under 40), where the
 /// network tells a tube from the cloth better when it looks closer.
@@ -120,6 +134,10 @@ pub struct BackgroundStats {
     pub background_lab: [f64; 3],
     /// Fraction of pixels within [`PLAIN_NEAR_LAB`] of that colour.
     pub near_fraction: f64,
+    /// Fraction of pixels on an edge (see [`CLOSE_MIN_EDGE_FRACTION`]),
+    /// measured only where it decides [`BackgroundStats::closer_look`]:
+    /// neither plain, nor dark, nor far from one colour.
+    pub edge_fraction: Option<f64>,
     /// Whether the background counts as plain (`near_fraction >=
     /// PLAIN_MIN_FRACTION`).
     pub plain: bool,
@@ -140,10 +158,15 @@ impl BackgroundStats {
     }
 
     /// Whether the network should look closer at the image: its
-    /// background is far from one colour ([`CLOSE_MAX_NEAR_FRACTION`]) or
-    /// dark ([`DARK_MAX_LIGHTNESS`]).
+    /// background is far from one colour ([`CLOSE_MAX_NEAR_FRACTION`]),
+    /// dark ([`DARK_MAX_LIGHTNESS`]), or not plain and dense with edges
+    /// ([`CLOSE_MIN_EDGE_FRACTION`]).
     pub fn closer_look(&self) -> bool {
-        self.near_fraction < CLOSE_MAX_NEAR_FRACTION || self.background_lab[0] < DARK_MAX_LIGHTNESS
+        self.near_fraction < CLOSE_MAX_NEAR_FRACTION
+            || self.background_lab[0] < DARK_MAX_LIGHTNESS
+            || self
+                .edge_fraction
+                .is_some_and(|edges| edges >= CLOSE_MIN_EDGE_FRACTION)
     }
 }
 
@@ -274,13 +297,30 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
     let bytes = lab.data_bytes().map_err(cv("read Lab pixels"))?;
     let background_lab = median3(bytes);
     let near_fraction = share_near(bytes, |_| true, |_| background_lab);
-    Ok(BackgroundStats {
+    let mut stats = BackgroundStats {
         background_lab,
         near_fraction,
+        edge_fraction: None,
         plain: near_fraction >= PLAIN_MIN_FRACTION,
         threshold_lab: 0.0,
         ambiguous_ratio: 0.0,
-    })
+    };
+    if !stats.plain && !stats.closer_look() {
+        stats.edge_fraction = Some(edge_fraction(&lab)?);
+    }
+    Ok(stats)
+}
+
+/// The share of `lab`'s pixels on an edge of its lightness (OpenCV's
+/// Canny at [`EDGE_THRESHOLDS`]).
+fn edge_fraction(lab: &Mat) -> Result<f64, VisionError> {
+    let mut lightness = Mat::default();
+    core::extract_channel(lab, &mut lightness, 0).map_err(cv("the lightness channel"))?;
+    let mut edges = Mat::default();
+    let [low, high] = EDGE_THRESHOLDS;
+    imgproc::canny(&lightness, &mut edges, low, high, 3, false).map_err(cv("edges"))?;
+    let on_edge = core::count_non_zero(&edges).map_err(cv("count edge pixels"))?;
+    Ok(f64::from(on_edge) / (f64::from(edges.rows()) * f64::from(edges.cols())).max(1.0))
 }
 
 /// Whether the background is plain around each pixel: the plain test of
@@ -808,6 +848,95 @@ mod tests {
                 "{angle_deg}°"
             );
         }
+    }
+
+    /// A 640 × 480 pale canvas with `strokes` short strokes of paint 2–4 px
+    /// wide in five colours, spread over it in a fixed pattern.
+    fn paint_on_canvas(strokes: i32) -> Mat {
+        let mut img = Mat::new_rows_cols_with_default(
+            480,
+            640,
+            core::CV_8UC3,
+            Scalar::new(225.0, 228.0, 232.0, 0.0),
+        )
+        .unwrap();
+        let colours = [
+            [40.0, 40.0, 40.0],
+            [30.0, 60.0, 200.0],
+            [200.0, 120.0, 40.0],
+            [60.0, 170.0, 90.0],
+            [120.0, 120.0, 130.0],
+        ];
+        for i in 0..strokes {
+            let from = Point::new((i * 97) % 640, (i * 61) % 480);
+            let angle_rad = f64::from(i) * 2.399;
+            let length_px = f64::from(30 + (i * 7) % 40);
+            let to = Point::new(
+                from.x + (length_px * angle_rad.cos()) as i32,
+                from.y + (length_px * angle_rad.sin()) as i32,
+            );
+            let [b, g, r] = colours[i as usize % colours.len()];
+            imgproc::line(
+                &mut img,
+                from,
+                to,
+                Scalar::new(b, g, r, 0.0),
+                2 + i % 3,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        img
+    }
+
+    #[test]
+    fn paint_on_a_bare_canvas_is_looked_at_closer_and_a_sheet_on_a_table_not() {
+        // Broad bare stretches keep the canvas over half near its colour,
+        // so the share near it alone would not look closer; its edges do.
+        let paint = background_stats(&paint_on_canvas(400)).unwrap();
+        assert!(
+            (CLOSE_MAX_NEAR_FRACTION..PLAIN_MIN_FRACTION).contains(&paint.near_fraction),
+            "{paint:?}"
+        );
+        assert!(
+            paint.edge_fraction.unwrap() >= CLOSE_MIN_EDGE_FRACTION,
+            "{paint:?}"
+        );
+        assert!(paint.closer_look() && !paint.busy(), "{paint:?}");
+        // A sheet of paper over the left 40 % of a wooden-brown table.
+        let mut table = Mat::new_rows_cols_with_default(
+            480,
+            640,
+            core::CV_8UC3,
+            Scalar::new(80.0, 120.0, 170.0, 0.0),
+        )
+        .unwrap();
+        imgproc::rectangle(
+            &mut table,
+            core::Rect::new(0, 0, 256, 480),
+            Scalar::all(235.0),
+            imgproc::FILLED,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        draw_middle_line(&mut table, 30.0, 8);
+        let sheet = background_stats(&table).unwrap();
+        assert!(
+            (CLOSE_MAX_NEAR_FRACTION..PLAIN_MIN_FRACTION).contains(&sheet.near_fraction),
+            "{sheet:?}"
+        );
+        assert!(
+            sheet.edge_fraction.unwrap() < CLOSE_MIN_EDGE_FRACTION,
+            "{sheet:?}"
+        );
+        assert!(!sheet.closer_look(), "{sheet:?}");
+        // Where the share near its colour decides, the edges are not counted.
+        let bare = background_stats(&paint_on_canvas(0)).unwrap();
+        assert!(bare.plain && bare.edge_fraction.is_none(), "{bare:?}");
+        let dense = background_stats(&paint_on_canvas(3000)).unwrap();
+        assert!(dense.busy() && dense.edge_fraction.is_none(), "{dense:?}");
     }
 
     #[test]

@@ -220,6 +220,7 @@ mod tests {
         let background = |near_fraction: f64| BackgroundStats {
             background_lab: [20.0, 128.0, 128.0],
             near_fraction,
+            edge_fraction: None,
             plain: false,
             threshold_lab: 0.0,
             ambiguous_ratio: 0.0,
