@@ -45,7 +45,8 @@ pub struct VisionArgs {
     #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
     pub net_scale: f64,
     /// The same where less than half of the image is near its median
-    /// colour (paint, prints, mosaics) or the background is dark, where the
+    /// colour (paint, prints, mosaics), the background is dark, or it is
+    /// not plain and dense with edges (paint on a bare canvas), where the
     /// network tells cables from strokes and tubes from dark cloth better
     /// when it looks closer [default: 0.5, or --net-scale where larger]
     #[arg(long, value_parser = input_scale)]
