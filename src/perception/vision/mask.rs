@@ -850,16 +850,16 @@ mod tests {
         }
     }
 
+    /// A 640 × 480 image of one colour, `bgr`.
+    fn flat_640x480(bgr: [f64; 3]) -> Mat {
+        let [b, g, r] = bgr;
+        Mat::new_rows_cols_with_default(480, 640, core::CV_8UC3, Scalar::new(b, g, r, 0.0)).unwrap()
+    }
+
     /// A 640 × 480 pale canvas with `strokes` short strokes of paint 2–4 px
     /// wide in five colours, spread over it in a fixed pattern.
     fn paint_on_canvas(strokes: i32) -> Mat {
-        let mut img = Mat::new_rows_cols_with_default(
-            480,
-            640,
-            core::CV_8UC3,
-            Scalar::new(225.0, 228.0, 232.0, 0.0),
-        )
-        .unwrap();
+        let mut img = flat_640x480([225.0, 228.0, 232.0]);
         let colours = [
             [40.0, 40.0, 40.0],
             [30.0, 60.0, 200.0],
@@ -905,13 +905,7 @@ mod tests {
         );
         assert!(paint.closer_look() && !paint.busy(), "{paint:?}");
         // A sheet of paper over the left 40 % of a wooden-brown table.
-        let mut table = Mat::new_rows_cols_with_default(
-            480,
-            640,
-            core::CV_8UC3,
-            Scalar::new(80.0, 120.0, 170.0, 0.0),
-        )
-        .unwrap();
+        let mut table = flat_640x480([80.0, 120.0, 170.0]);
         imgproc::rectangle(
             &mut table,
             core::Rect::new(0, 0, 256, 480),
