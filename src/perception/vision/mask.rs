@@ -66,6 +66,20 @@ pub const PLAIN_MIN_FRACTION: f64 = 0.90;
 /// paper's kind", gives the figures).
 pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 
+/// A background that is not plain is busy too where at least this share
+/// of the pixels lie on an edge ([`EDGE_THRESHOLDS`]): paint on a bare
+/// canvas, whose broad stretches of one colour put it above
+/// [`BUSY_MAX_NEAR_FRACTION`], is dense with edges; a table, a cloth or
+/// paper with cables on it is not, nor a table under a light that falls
+/// off (docs/vision-record.md, "Paint on a bare canvas is busy").
+pub const BUSY_MIN_EDGE_FRACTION: f64 = 0.08;
+
+/// Canny's two thresholds on the plain test's lightness (8-bit, L·255/100)
+/// for [`BUSY_MIN_EDGE_FRACTION`]: OpenCV's common 1 : 3, at a step that
+/// a stroke of paint or a cable's outline makes and a table's grain does
+/// not.
+const EDGE_THRESHOLDS: [f64; 2] = [50.0, 150.0];
+
 /// The network looks closer at a background with less than this fraction
 /// near its median colour: busy ones, and paint, print and mosaic scenes
 /// with broad patches of one colour. It lies under what photographs of
@@ -73,20 +87,6 @@ pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 /// nothing and costs time (docs/vision-record.md, "Closer on dark
 /// backgrounds too").
 pub const CLOSE_MAX_NEAR_FRACTION: f64 = 0.5;
-
-/// The network also looks closer at a background that is not plain where
-/// at least this share of the pixels lie on an edge ([`EDGE_THRESHOLDS`]):
-/// paint on a bare canvas, whose broad stretches of one colour put it
-/// above [`CLOSE_MAX_NEAR_FRACTION`], is dense with edges; a table, a cloth
-/// or paper with cables on it is not (docs/vision-record.md, "Paint on a
-/// bare canvas looked at closer").
-pub const CLOSE_MIN_EDGE_FRACTION: f64 = 0.08;
-
-/// Canny's two thresholds on the plain test's lightness (8-bit, L·255/100)
-/// for [`CLOSE_MIN_EDGE_FRACTION`]: OpenCV's common 1 : 3, at a step that
-/// a stroke of paint or a cable's outline makes and a table's grain does
-/// not.
-const EDGE_THRESHOLDS: [f64; 2] = [50.0, 150.0];
 
 /// A background whose median lightness (8-bit CIELAB, L·255/100) is under
 /// this is dark: black cloth, a dark table (L* under 40), where the
@@ -134,9 +134,9 @@ pub struct BackgroundStats {
     pub background_lab: [f64; 3],
     /// Fraction of pixels within [`PLAIN_NEAR_LAB`] of that colour.
     pub near_fraction: f64,
-    /// Fraction of pixels on an edge (see [`CLOSE_MIN_EDGE_FRACTION`]),
-    /// measured only where it decides [`BackgroundStats::closer_look`]:
-    /// neither plain, nor dark, nor far from one colour.
+    /// Fraction of pixels on an edge (see [`BUSY_MIN_EDGE_FRACTION`]),
+    /// measured only where it decides [`BackgroundStats::busy`]: neither
+    /// plain nor busy by its share near the median colour.
     pub edge_fraction: Option<f64>,
     /// Whether the background counts as plain (`near_fraction >=
     /// PLAIN_MIN_FRACTION`).
@@ -152,21 +152,21 @@ pub struct BackgroundStats {
 
 impl BackgroundStats {
     /// Whether the background is busy: paint, prints, mosaics (see
-    /// [`BUSY_MAX_NEAR_FRACTION`]).
+    /// [`BUSY_MAX_NEAR_FRACTION`] and [`BUSY_MIN_EDGE_FRACTION`]).
     pub fn busy(&self) -> bool {
         self.near_fraction < BUSY_MAX_NEAR_FRACTION
+            || self
+                .edge_fraction
+                .is_some_and(|edges| edges >= BUSY_MIN_EDGE_FRACTION)
     }
 
     /// Whether the network should look closer at the image: its
-    /// background is far from one colour ([`CLOSE_MAX_NEAR_FRACTION`]),
-    /// dark ([`DARK_MAX_LIGHTNESS`]), or not plain and dense with edges
-    /// ([`CLOSE_MIN_EDGE_FRACTION`]).
+    /// background is busy, far from one colour
+    /// ([`CLOSE_MAX_NEAR_FRACTION`]) or dark ([`DARK_MAX_LIGHTNESS`]).
     pub fn closer_look(&self) -> bool {
-        self.near_fraction < CLOSE_MAX_NEAR_FRACTION
+        self.busy()
+            || self.near_fraction < CLOSE_MAX_NEAR_FRACTION
             || self.background_lab[0] < DARK_MAX_LIGHTNESS
-            || self
-                .edge_fraction
-                .is_some_and(|edges| edges >= CLOSE_MIN_EDGE_FRACTION)
     }
 }
 
@@ -305,7 +305,7 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
         threshold_lab: 0.0,
         ambiguous_ratio: 0.0,
     };
-    if !stats.plain && !stats.closer_look() {
+    if !stats.plain && !stats.busy() {
         stats.edge_fraction = Some(edge_fraction(&lab)?);
     }
     Ok(stats)
@@ -891,19 +891,20 @@ mod tests {
     }
 
     #[test]
-    fn paint_on_a_bare_canvas_is_looked_at_closer_and_a_sheet_on_a_table_not() {
+    fn paint_on_a_bare_canvas_is_busy_and_a_sheet_on_a_table_not() {
         // Broad bare stretches keep the canvas over half near its colour,
-        // so the share near it alone would not look closer; its edges do.
+        // so the share near it alone would take it for neither busy nor
+        // worth a closer look; its edges make it both.
         let paint = background_stats(&paint_on_canvas(400)).unwrap();
         assert!(
             (CLOSE_MAX_NEAR_FRACTION..PLAIN_MIN_FRACTION).contains(&paint.near_fraction),
             "{paint:?}"
         );
         assert!(
-            paint.edge_fraction.unwrap() >= CLOSE_MIN_EDGE_FRACTION,
+            paint.edge_fraction.unwrap() >= BUSY_MIN_EDGE_FRACTION,
             "{paint:?}"
         );
-        assert!(paint.closer_look() && !paint.busy(), "{paint:?}");
+        assert!(paint.busy() && paint.closer_look(), "{paint:?}");
         // A sheet of paper over the left 40 % of a wooden-brown table.
         let mut table = flat_640x480([80.0, 120.0, 170.0]);
         imgproc::rectangle(
@@ -922,10 +923,10 @@ mod tests {
             "{sheet:?}"
         );
         assert!(
-            sheet.edge_fraction.unwrap() < CLOSE_MIN_EDGE_FRACTION,
+            sheet.edge_fraction.unwrap() < BUSY_MIN_EDGE_FRACTION,
             "{sheet:?}"
         );
-        assert!(!sheet.closer_look(), "{sheet:?}");
+        assert!(!sheet.busy() && !sheet.closer_look(), "{sheet:?}");
         // Where the share near its colour decides, the edges are not counted.
         let bare = background_stats(&paint_on_canvas(0)).unwrap();
         assert!(bare.plain && bare.edge_fraction.is_none(), "{bare:?}");
