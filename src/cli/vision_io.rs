@@ -78,7 +78,7 @@ pub struct VisionArgs {
     #[arg(long, default_value_t = VisionConfig::default().straight_edge_radius_px, value_parser = length_px)]
     pub straight_edge_radius_px: f64,
     /// Drop detections less confident than this (0 to 1; see `detect`'s
-    /// `confidence`): splashes of paint and brushed strokes; 0 keeps all.
+    /// `confidence`): splashes of paint, brushed strokes and flat paint; 0 keeps all.
     #[arg(long, default_value_t = DEFAULT_MIN_CONFIDENCE, value_parser = confidence)]
     pub min_confidence: f64,
 }

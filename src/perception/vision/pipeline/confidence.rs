@@ -1,9 +1,10 @@
-//! How much a detection looks like a cable, from its mask and, when the
-//! network made the mask, from how sure the network was of it: a cable
-//! is long against its width and equally wide along its length, as wide as
-//! the image's other cables, and the network marks it well above its
-//! threshold; a splash of paint is short, a brushed stroke swells and
-//! thins, and the network is less sure of either. The task grasps the most
+//! How much a detection looks like a cable, from its mask, the image's
+//! lightness inside it and, when the network made the mask, from how sure
+//! the network was of it: a cable is long against its width and equally
+//! wide along its length, as wide as the image's other cables, shaded as
+//! a tube is, and the network marks it well above its threshold; a splash
+//! of paint is short, a brushed stroke swells and thins, paint dries
+//! flat, and the network is less sure of either. The task grasps the most
 //! confident cable, and the pipeline drops detections below
 //! [`VisionConfig::min_confidence`].
 
@@ -26,6 +27,13 @@ const CABLE_LENGTH_WIDTHS: f64 = 10.0;
 const WIDTH_SPREAD_HALF: f64 = 0.3;
 /// The factor off the image's typical width at which confidence halves.
 const WIDTH_RATIO_HALF: f64 = 2.0;
+
+/// The spread (standard deviation, gray levels) of the image's lightness
+/// inside a detection from which it is as shaded as a cable: light falls
+/// off across a tube and sheen runs along it, while a stroke of paint is
+/// one flat colour. Below it confidence falls with the square of the
+/// spread.
+const SHADED_SPREAD_GRAY: f64 = 5.0;
 
 /// The share of the image near the background's colour from which the
 /// background holds too little paint for strokes to pass as cables: tubes
@@ -84,19 +92,74 @@ impl Belief {
     }
 }
 
+/// The distance to the mask's edge (px) beyond which a pixel is inside
+/// a detection rather than on its rim, where cable and background blend:
+/// past the pixels that touch the background, sideways or diagonally.
+const RIM_PX: f64 = 1.5;
+
+/// The spread (standard deviation, gray levels) of `gray`'s lightness
+/// inside the mask across the path `points_px`: on lines across it at
+/// every other point, out to the mask's half width there, over the
+/// pixels further than [`RIM_PX`] from its edge (`half_widths`: the
+/// mask's distance transform). `None` where fewer than two are left.
+pub(super) fn lightness_spread(
+    gray: &Mat,
+    half_widths: &Mat,
+    points_px: &[[f64; 2]],
+) -> Option<f64> {
+    // Read as slices: some thousand pixels a detection, where `at_2d`'s
+    // checks would cost more than the reading.
+    let (cols, rows) = (gray.cols(), gray.rows());
+    if (half_widths.cols(), half_widths.rows()) != (cols, rows) {
+        return None;
+    }
+    let lightness = gray.data_typed::<u8>().ok()?;
+    let half_width = half_widths.data_typed::<f32>().ok()?;
+    let index = |q: [f64; 2]| {
+        let (x, y) = (q[0].round() as i32, q[1].round() as i32);
+        (x >= 0 && y >= 0 && x < cols && y < rows).then(|| y as usize * cols as usize + x as usize)
+    };
+    let (mut count, mut sum, mut sum_sq) = (0.0, 0.0, 0.0);
+    let last = points_px.len().checked_sub(1)?;
+    for i in (0..=last).step_by(2) {
+        let (before, after) = (points_px[i.saturating_sub(2)], points_px[(i + 2).min(last)]);
+        let along = [after[0] - before[0], after[1] - before[1]];
+        let norm = along[0].hypot(along[1]);
+        let p = points_px[i];
+        let Some(centre) = index(p).filter(|_| norm > 0.0) else {
+            continue;
+        };
+        let across = [-along[1] / norm, along[0] / norm];
+        let reach = half_width[centre].floor() as i32;
+        for step in -reach..=reach {
+            let q = [
+                p[0] + f64::from(step) * across[0],
+                p[1] + f64::from(step) * across[1],
+            ];
+            if let Some(at) = index(q).filter(|&at| f64::from(half_width[at]) > RIM_PX) {
+                let v = f64::from(lightness[at]);
+                (count, sum, sum_sq) = (count + 1.0, sum + v, sum_sq + v * v);
+            }
+        }
+    }
+    (count >= 2.0).then(|| (sum_sq / count - (sum / count).powi(2)).max(0.0).sqrt())
+}
+
 /// The confidence in [0, 1] that the path `points_px` (in `half_widths`'
 /// pixels), `length_px` long, is a cable; with the network's `belief`,
 /// times how sure it was along the path (see [`Belief::along`]).
 /// `typical_width_px`, the image's cables' width, where the mask may hold
 /// long even strokes of another width (see [`strokes_possible`]); `None`
 /// where what stands out is cables, and tubes of several widths may lie
-/// together.
+/// together. `lightness_spread`, where strokes are possible: see
+/// [`lightness_spread`] and [`SHADED_SPREAD_GRAY`].
 pub(super) fn confidence(
     half_widths: &Mat,
     belief: Option<&Belief>,
     points_px: &[[f64; 2]],
     length_px: f64,
     typical_width_px: Option<f64>,
+    lightness_spread: Option<f64>,
 ) -> f64 {
     let mut widths: Vec<f64> = points_px
         .iter()
@@ -121,7 +184,8 @@ pub(super) fn confidence(
         0.5_f64.powf((width / typical).log(WIDTH_RATIO_HALF).powi(2))
     });
     let believed = belief.map_or(1.0, |b| b.along(points_px));
-    long * even * like_others * believed
+    let shaded = lightness_spread.map_or(1.0, |s| (s / SHADED_SPREAD_GRAY).powi(2).min(1.0));
+    long * even * like_others * believed * shaded
 }
 
 #[cfg(test)]
@@ -173,6 +237,7 @@ mod tests {
             points_px,
             length_px,
             Some(9.0),
+            None,
         )
     }
 
@@ -206,8 +271,8 @@ mod tests {
         // Twice as wide: halved among the network's strokes, as much a
         // cable on a plain background's classical mask.
         let tube = half_widths(&mask_with(|m| line(m, (20, 100), (280, 100), 18))).unwrap();
-        let among_strokes = confidence(&tube, None, &points, 260.0, Some(9.0));
-        let on_plain = confidence(&tube, None, &points, 260.0, None);
+        let among_strokes = confidence(&tube, None, &points, 260.0, Some(9.0), None);
+        let on_plain = confidence(&tube, None, &points, 260.0, None, None);
         assert!(on_plain > 0.9, "{on_plain}");
         assert!(
             among_strokes < 0.6 * on_plain,
@@ -234,6 +299,74 @@ mod tests {
     }
 
     #[test]
+    fn paint_as_flat_as_a_stroke_is_less_confident_than_a_shaded_cable() {
+        // Two detections on a gray image: an 11 px tube, lighter along its
+        // middle than at its sides, and an 11 px stroke of one flat gray
+        // with a little noise, whose mask spills a pixel onto the
+        // background on each side.
+        let (cable, stroke) = ((20, 60), (20, 140));
+        let mask = mask_with(|m| {
+            line(m, cable, (280, cable.1), 11);
+            line(m, stroke, (280, stroke.1), 13);
+        });
+        let mut gray =
+            Mat::new_rows_cols_with_default(200, 300, CV_8UC1, Scalar::all(90.0)).unwrap();
+        for dy in -5_i32..=5 {
+            let shade = 200.0 - 20.0 * f64::from(dy * dy) / 5.0;
+            imgproc::line(
+                &mut gray,
+                Point::new(cable.0, cable.1 + dy),
+                Point::new(280, cable.1 + dy),
+                Scalar::all(shade),
+                1,
+                imgproc::LINE_8,
+                0,
+            )
+            .unwrap();
+        }
+        let mut noise =
+            Mat::new_rows_cols_with_default(200, 300, CV_8UC1, Scalar::all(0.0)).unwrap();
+        core::randu(&mut noise, &Scalar::all(0.0), &Scalar::all(4.0)).unwrap();
+        imgproc::line(
+            &mut gray,
+            Point::new(stroke.0, stroke.1),
+            Point::new(280, stroke.1),
+            Scalar::all(150.0),
+            11,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        let mut noisy = Mat::default();
+        core::add(&gray, &noise, &mut noisy, &core::no_array(), -1).unwrap();
+
+        let spread = |at: (i32, i32)| {
+            let points = along([f64::from(at.0), f64::from(at.1)], [280.0, f64::from(at.1)]);
+            lightness_spread(&noisy, &half_widths(&mask).unwrap(), &points).unwrap()
+        };
+        let (shaded, flat) = (spread(cable), spread(stroke));
+        assert!(shaded > SHADED_SPREAD_GRAY, "{shaded}");
+        // The mask's rim, where the background shows, does not count.
+        assert!(flat < 2.0, "{flat}");
+
+        let widths = half_widths(&mask).unwrap();
+        let points = along([20.0, 60.0], [280.0, 60.0]);
+        let with = |spread| confidence(&widths, None, &points, 260.0, Some(11.0), spread);
+        assert!((with(Some(shaded)) - with(None)).abs() < 1e-9);
+        assert!(with(Some(flat)) < 0.15 * with(None), "{}", with(Some(flat)));
+        // Halfway to shaded enough: a quarter as confident.
+        let half = with(Some(0.5 * SHADED_SPREAD_GRAY));
+        assert!((half - 0.25 * with(None)).abs() < 1e-9, "{half}");
+        // A path whose mask is only its rim has no inside to measure.
+        let thin = mask_with(|m| line(m, (20, 100), (280, 100), 1));
+        let points = along([20.0, 100.0], [280.0, 100.0]);
+        assert_eq!(
+            lightness_spread(&noisy, &half_widths(&thin).unwrap(), &points),
+            None
+        );
+    }
+
+    #[test]
     fn a_path_off_the_mask_has_no_confidence() {
         let empty = mask_with(|_| {});
         let points = along([20.0, 100.0], [280.0, 100.0]);
@@ -245,7 +378,8 @@ mod tests {
                 None,
                 &points,
                 260.0,
-                Some(0.0)
+                Some(0.0),
+                None
             ),
             0.0
         );
@@ -262,11 +396,11 @@ mod tests {
                 Mat::new_rows_cols_with_default(200, 300, core::CV_32FC1, Scalar::all(p)).unwrap();
             Belief::of(probability, size, 0.5).unwrap().unwrap()
         };
-        let shape_alone = confidence(&widths, None, &points, 260.0, Some(9.0));
-        let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, Some(9.0));
+        let shape_alone = confidence(&widths, None, &points, 260.0, Some(9.0), None);
+        let certain = confidence(&widths, Some(&sure(1.0)), &points, 260.0, Some(9.0), None);
         assert!((certain - shape_alone).abs() < 1e-9);
         // At 0.8, three fifths of the way from the threshold to 1.
-        let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, Some(9.0));
+        let unsure = confidence(&widths, Some(&sure(0.8)), &points, 260.0, Some(9.0), None);
         assert!((unsure - 0.6 * shape_alone).abs() < 1e-6, "{unsure}");
         // A mask, not probabilities: no belief to weigh.
         assert!(Belief::of(cable.clone(), size, 0.5).unwrap().is_none());
@@ -274,7 +408,7 @@ mod tests {
         let small =
             Mat::new_rows_cols_with_default(50, 75, core::CV_32FC1, Scalar::all(0.8)).unwrap();
         let resized = Belief::of(small, size, 0.5).unwrap().unwrap();
-        let at_size = confidence(&widths, Some(&resized), &points, 260.0, Some(9.0));
+        let at_size = confidence(&widths, Some(&resized), &points, 260.0, Some(9.0), None);
         assert!((at_size - unsure).abs() < 1e-6, "{at_size}");
     }
 }

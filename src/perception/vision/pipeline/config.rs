@@ -99,7 +99,7 @@ pub struct VisionConfig {
     /// cell's detector leaves them out.
     pub cable_masks: bool,
     /// Detections less confident than this (see `confidence.rs`) are
-    /// dropped as probably not cables: splashes of paint, brushed strokes.
+    /// dropped as probably not cables: splashes of paint, brushed strokes, flat paint.
     pub min_confidence: f64,
 }
 

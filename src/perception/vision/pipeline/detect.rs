@@ -7,6 +7,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use opencv::core::{self, Mat, Rect};
+use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::confidence::{self, Belief};
@@ -101,7 +102,7 @@ impl Pipeline {
         }
         if found.unconfident_dropped > 0 {
             notes.push(format!(
-                "dropped {} detection(s) less confident than {:.2} as probably not cables: short against their width, unevenly wide, or unlike the other cables' width",
+                "dropped {} detection(s) less confident than {:.2} as probably not cables: short against their width, unevenly wide, unlike the other cables' width, or flat as paint",
                 found.unconfident_dropped, self.config.min_confidence
             ));
         }
@@ -272,13 +273,27 @@ impl Pipeline {
         let mut unconfident_dropped = 0;
         let mut plain_around = None;
         let half_widths = mask::half_widths(mask_roi)?;
+        // Paint dries flat; where it may pass for cable, how shaded each
+        // detection is counts (see `confidence::lightness_spread`).
+        let gray = if look_alikes.strokes {
+            let mut gray = Mat::default();
+            imgproc::cvt_color_def(image_roi, &mut gray, imgproc::COLOR_BGR2GRAY)
+                .map_err(cv("the image's lightness"))?;
+            Some(gray)
+        } else {
+            None
+        };
         for path in paths {
+            let lightness_spread = gray
+                .as_ref()
+                .and_then(|gray| confidence::lightness_spread(gray, &half_widths, &path.points_px));
             let confidence = confidence::confidence(
                 &half_widths,
                 belief,
                 &path.points_px,
                 cable_length_px(path),
                 look_alikes.strokes.then_some(found.width_px),
+                lightness_spread,
             );
             if confidence < self.config.min_confidence {
                 unconfident_dropped += 1;
