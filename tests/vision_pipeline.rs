@@ -1114,6 +1114,70 @@ fn a_short_piece_on_a_busy_background_is_dropped_as_paint_and_on_wood_kept() {
 }
 
 #[test]
+fn paint_as_flat_as_a_stroke_is_dropped_and_a_shaded_cable_kept() {
+    // On Pollock-like paint the network (a stand-in) marks a rendered
+    // cable and, below it, a stroke of one flat green as long and as wide.
+    let cable_curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+    let stroke_curve = arc_px([320.0, 40.0], 380.0, 0.8, 2.3);
+    let mut scene = draw_scene(
+        480,
+        640,
+        Background::Pollock,
+        0.0,
+        vec![cable(cable_curve.clone(), [40, 40, 220])],
+        7,
+    )
+    .unwrap();
+    let stroke: Vector<Vector<Point>> = Vector::from_iter([stroke_curve
+        .iter()
+        .map(|p| Point::new(p[0].round() as i32, p[1].round() as i32))
+        .collect()]);
+    let mut mask = scene.union_mask.clone();
+    for (image, colour) in [
+        (&mut scene.bgr, Scalar::new(60.0, 160.0, 60.0, 0.0)),
+        (&mut mask, Scalar::all(255.0)),
+    ] {
+        imgproc::polylines(image, &stroke, false, colour, 8, imgproc::LINE_8, 0).unwrap();
+    }
+    let detect = |min_confidence: f64| {
+        let config = VisionConfig {
+            mask: MaskMethod::Network,
+            min_confidence,
+            ..VisionConfig::default()
+        };
+        Pipeline::new(config)
+            .detect(&scene.bgr, Some(&mut KnownMask::new(mask.clone())))
+            .unwrap()
+    };
+
+    let out = detect(VisionConfig::default().min_confidence);
+    assert!(out.background.near_fraction < 0.8, "{:?}", out.background);
+    assert_each_followed(&out, std::slice::from_ref(&cable_curve), 2.0);
+    assert!(
+        out.notes.iter().any(|n| n.contains("flat as paint")),
+        "{:?}",
+        out.notes
+    );
+    // With no floor both are reported: the stroke is as long, as even
+    // and as wide as the cable, and only its flat colour tells it apart.
+    let all = detect(0.0);
+    assert_each_followed(&all, &[cable_curve.clone(), stroke_curve.clone()], 2.0);
+    let confidence_along = |curve: &[[f64; 2]]| {
+        all.cables
+            .iter()
+            .find(|c| distance_to_polylines(c.grasp_px, &[curve.to_vec()]) < 3.0)
+            .map(|c| c.confidence)
+            .unwrap()
+    };
+    let (of_cable, of_stroke) = (
+        confidence_along(&cable_curve),
+        confidence_along(&stroke_curve),
+    );
+    assert!(of_cable > 0.8, "{of_cable}");
+    assert!(of_stroke < 0.2 * of_cable, "{of_stroke} against {of_cable}");
+}
+
+#[test]
 fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
     let scene = draw_scene(
