@@ -416,6 +416,10 @@ fn eval_vision_scores_a_folder_laid_out_like_cables_dev() {
         "{e}"
     );
     assert!(e["stage_ms"]["total"]["median"].as_f64().is_some());
+    // Each image's most confident cable, which the task grasps first, is
+    // grasped on a labelled one.
+    assert_eq!(e["first_grasps_near_label"]["successes"], 2, "{e}");
+    assert_eq!(e["first_grasps_near_label"]["trials"], 2, "{e}");
     // Dark cables on a plain table: `auto` takes the classical mask,
     // clean, on both.
     assert_eq!(
@@ -556,6 +560,37 @@ fn eval_vision_names_the_cables_that_each_side_lacks() {
     assert!(on_a.iter().all(|&v| v > 200), "{on_a:?}");
     let on_c = bgr(550, 100);
     assert!(on_c[2] > 200 && on_c[0] < 80 && on_c[1] < 80, "{on_c:?}");
+}
+
+#[test]
+fn eval_vision_says_when_the_first_grasp_is_on_no_labelled_cable() {
+    // The image shows cable A alone; its label is C, which is not there:
+    // the task's first grasp, on A, holds no labelled cable.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let a = cable([80.0, 300.0], [560.0, 420.0]);
+    let c = cable([500.0, 0.0], [600.0, 200.0]);
+    let (args, e) = eval_labels_over(dir.path(), vec![c], vec![a]);
+    assert_eq!(e["per_image"][0][1]["first_grasp_near"], false, "{e}");
+    assert_eq!(e["first_grasps_near_label"]["successes"], 0, "{e}");
+    assert_eq!(e["first_grasps_near_label"]["trials"], 1, "{e}");
+    let printed = String::from_utf8_lossy(&cablecell(&args).stdout).into_owned();
+    assert!(
+        printed.contains("first grasp near label 0/1 = 0.0 %"),
+        "{printed}"
+    );
+
+    // With nothing in view, no grasp is tried.
+    let (_, e) = eval_labels_over(
+        dir.path(),
+        vec![cable([500.0, 0.0], [600.0, 200.0])],
+        vec![],
+    );
+    assert_eq!(
+        e["per_image"][0][1]["first_grasp_near"],
+        serde_json::Value::Null,
+        "{e}"
+    );
+    assert_eq!(e["first_grasps_near_label"], serde_json::Value::Null, "{e}");
 }
 
 #[test]

@@ -11,6 +11,7 @@ use crate::hw::{DeviceError, DeviceKind};
 use crate::perception::vision::Pipeline;
 use crate::perception::vision::grasp_frame::ImageToBase;
 use crate::perception::vision::network::LazyNetwork;
+use crate::perception::vision::pipeline::grasp_order;
 
 /// σ of the pipeline's centre line against the true one, in pixels: on
 /// rendered scenes its grasp point lies 0.4 px from the truth in the
@@ -77,7 +78,7 @@ impl CableDetector for VisionDetector {
                 Some((cable.length_px, detection))
             })
             .collect();
-        found.sort_by(|a, b| (b.1.confidence.total_cmp(&a.1.confidence)).then(b.0.total_cmp(&a.0)));
+        found.sort_by(|a, b| grasp_order(a.1.confidence, a.0, b.1.confidence, b.0));
         Ok(Detections {
             cables: found.into_iter().map(|(_, detection)| detection).collect(),
             image: Some(CameraImage(Arc::new(image))),

@@ -89,6 +89,11 @@ struct Evaluation {
     /// Reported cables whose grasp point lies within 5 px of a labelled
     /// centre line, over all images: the label-robust score.
     grasps_near_label: Option<Rate>,
+    /// Images whose first grasp, on the cable the task would grasp first
+    /// (the most confident), lies within 5 px of a labelled centre line,
+    /// over the images where something was found: trial grasps that
+    /// would hold a cable.
+    first_grasps_near_label: Option<Rate>,
     /// Per stage, and "total": median and 95th percentile among the rest.
     stage_ms: BTreeMap<&'static str, Summary>,
     /// Each image's end-to-end time, in order; the sweep adds its later

@@ -150,6 +150,17 @@ pub(super) fn print_evaluation(dir: &Path, report: &Report) {
             100.0 * rate.ci95_high
         );
     }
+    if let Some(rate) = &e.first_grasps_near_label {
+        outln!(
+            "  {:<22} {}/{} = {:.1} % [{:.1}, {:.1}] (95 % CI) of the images with a cable found, the most confident one's grasp point within {CENTRELINE_NEAR_PX} px of a labelled centre line (the task grasps it first)",
+            "first grasp near label",
+            rate.successes,
+            rate.trials,
+            100.0 * rate.rate,
+            100.0 * rate.ci95_low,
+            100.0 * rate.ci95_high
+        );
+    }
     if e.mask_used.labelled > 0 {
         outln!(
             "  {:<22} the labelled one in {} of the images (--labelled-mask)",

@@ -170,6 +170,16 @@ pub(super) fn evaluate(
             per_image.iter().map(|(_, s)| s.grasps_near).sum(),
             per_image.iter().map(|(_, s)| s.predicted_count).sum(),
         ),
+        first_grasps_near_label: Rate::wilson(
+            per_image
+                .iter()
+                .filter(|(_, s)| s.first_grasp_near == Some(true))
+                .count(),
+            per_image
+                .iter()
+                .filter(|(_, s)| s.first_grasp_near.is_some())
+                .count(),
+        ),
         stage_ms: stage_ms
             .iter()
             .filter_map(|(stage, ms)| Summary::of(ms).map(|s| (*stage, s)))

@@ -11,7 +11,7 @@ use super::dataset::GroundTruth;
 use super::measure::{count, dice, distance_to_polylines, mean, overlap, size_of};
 use crate::perception::vision::error::VisionError;
 use crate::perception::vision::paths::polyline_length;
-use crate::perception::vision::pipeline::{CableInstance, VisionOutput};
+use crate::perception::vision::pipeline::{CableInstance, VisionOutput, first_to_grasp};
 
 /// How one image's result compares with its truth.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, JsonSchema)]
@@ -39,6 +39,11 @@ pub struct ImageScore {
     /// hold a cable, a figure labels lying a few pixels off their wires do
     /// not move (as the masks' DICE is moved).
     pub grasps_near: usize,
+    /// Whether the cable the task would grasp first (the most confident,
+    /// the longer of two equally so) has its grasp point within
+    /// [`CENTRELINE_NEAR_PX`] of a labelled centre line: a trial grasp
+    /// that would hold a cable. `None` when nothing was found.
+    pub first_grasp_near: Option<bool>,
     /// Labelled cables that no instance matches (instance DICE at least
     /// [`MATCH_MIN_DICE`]): why a count came out low.
     pub missed: Vec<Unmatched>,
@@ -296,10 +301,11 @@ pub fn score_cables(
             .iter()
             .map(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px)),
     );
-    let grasps_near = cables
-        .iter()
-        .filter(|c| distance_to_polylines(c.grasp_px, &truth.polylines_px) <= CENTRELINE_NEAR_PX)
-        .count();
+    let grasp_near = |c: &CableInstance| {
+        distance_to_polylines(c.grasp_px, &truth.polylines_px) <= CENTRELINE_NEAR_PX
+    };
+    let grasps_near = cables.iter().filter(|c| grasp_near(c)).count();
+    let first_grasp_near = first_to_grasp(cables).map(grasp_near);
     let (mask_offset_px, union_dice_at_offset) = best_offset(union_mask, &truth.union_mask);
     let found_lines: Vec<Vec<[f64; 2]>> = cables.iter().map(|c| c.samples_px.clone()).collect();
     let (labelled_length_px, labelled_length_found_px) =
@@ -317,6 +323,7 @@ pub fn score_cables(
         centerline_px,
         grasp_error_px,
         grasps_near,
+        first_grasp_near,
         missed,
         unlabelled,
         in_pieces,
@@ -454,6 +461,33 @@ mod tests {
         let none = score_cables(&[], &truth.union_mask, &truth).unwrap();
         assert_eq!(none.labelled_length_found_px, 0.0);
         assert_eq!(none.found_length_px, 0.0);
+    }
+
+    #[test]
+    fn the_first_grasp_is_the_most_confident_cables_and_the_longer_of_two_alike() {
+        let truth = drawn_truth(vec![vec![[10.0, 20.0], [150.0, 20.0]]], 7, 0.0);
+        let on_label = found_along([10.0, 21.0], [150.0, 21.0]);
+        let off_label = |confidence: f64, to_x: f64| CableInstance {
+            confidence,
+            ..found_along([2.0, 80.0], [to_x, 80.0])
+        };
+        let first = |cables: &[CableInstance]| {
+            score_cables(cables, &truth.union_mask, &truth)
+                .unwrap()
+                .first_grasp_near
+        };
+        // Paint more confident than the cable is grasped first, and misses.
+        let paint = off_label(1.0, 120.0);
+        let cable = CableInstance {
+            confidence: 0.9,
+            ..on_label.clone()
+        };
+        assert_eq!(first(&[cable.clone(), paint]), Some(false));
+        assert_eq!(first(&[cable, off_label(0.5, 120.0)]), Some(true));
+        // As confident: the longer is grasped first.
+        assert_eq!(first(&[off_label(1.0, 60.0), on_label.clone()]), Some(true));
+        assert_eq!(first(&[on_label, off_label(1.0, 158.0)]), Some(false));
+        assert_eq!(first(&[]), None);
     }
 
     #[test]

@@ -29,7 +29,9 @@ pub use config::{DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, VisionConfi
 pub(crate) use draw::draw_paths;
 pub use draw::union_mask;
 pub use mask_choice::MaskNetwork;
-pub use output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
+pub use output::{
+    CableInstance, MaskInstances, VisionOutput, VisionSkip, first_to_grasp, grasp_order,
+};
 pub use work_area::MAX_ENLARGEMENT;
 
 /// The vision pipeline, configured once and run per image.

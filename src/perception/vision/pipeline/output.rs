@@ -1,6 +1,8 @@
 //! What the pipeline finds: the cables, each in the image's pixels, and
 //! how it found them.
 
+use std::cmp::Ordering;
+
 use opencv::core::Mat;
 use schemars::JsonSchema;
 
@@ -33,6 +35,28 @@ pub struct CableInstance {
     /// at crossings); `None` unless [`VisionConfig::cable_masks`].
     #[serde(skip)]
     pub mask: Option<Mat>,
+}
+
+/// The order in which the task grasps cables, from each one's confidence
+/// and length: the more confident first, the longer of two equally
+/// confident. `Less` puts the first cable before the second.
+pub fn grasp_order(
+    confidence: f64,
+    length_px: f64,
+    other_confidence: f64,
+    other_length_px: f64,
+) -> Ordering {
+    other_confidence
+        .total_cmp(&confidence)
+        .then(other_length_px.total_cmp(&length_px))
+}
+
+/// The cable the task would grasp first (see [`grasp_order`]); `None`
+/// when there is none.
+pub fn first_to_grasp(cables: &[CableInstance]) -> Option<&CableInstance> {
+    cables
+        .iter()
+        .min_by(|a, b| grasp_order(a.confidence, a.length_px, b.confidence, b.length_px))
 }
 
 /// What the pipeline found, and how.
