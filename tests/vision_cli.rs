@@ -569,7 +569,7 @@ fn eval_vision_says_when_the_first_grasp_is_on_no_labelled_cable() {
     let dir = tempfile::tempdir().expect("tempdir");
     let a = cable([80.0, 300.0], [560.0, 420.0]);
     let c = cable([500.0, 0.0], [600.0, 200.0]);
-    let (args, e) = eval_labels_over(dir.path(), vec![c], vec![a]);
+    let (args, e) = eval_labels_over(dir.path(), vec![c.clone()], vec![a]);
     assert_eq!(e["per_image"][0][1]["first_grasp_near"], false, "{e}");
     assert_eq!(e["first_grasps_near_label"]["successes"], 0, "{e}");
     assert_eq!(e["first_grasps_near_label"]["trials"], 1, "{e}");
@@ -580,11 +580,7 @@ fn eval_vision_says_when_the_first_grasp_is_on_no_labelled_cable() {
     );
 
     // With nothing in view, no grasp is tried.
-    let (_, e) = eval_labels_over(
-        dir.path(),
-        vec![cable([500.0, 0.0], [600.0, 200.0])],
-        vec![],
-    );
+    let (_, e) = eval_labels_over(dir.path(), vec![c], vec![]);
     assert_eq!(
         e["per_image"][0][1]["first_grasp_near"],
         serde_json::Value::Null,
