@@ -317,6 +317,29 @@ fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
     );
 }
 
+/// The busy scenes' network is checked as the first one is: a run that
+/// would meet a busy scene halfway through must not start without it.
+#[test]
+fn a_missing_busy_scenes_model_is_refused_at_its_line_before_the_cell_moves() {
+    let shipped = root().join("models/cable_segmentation.onnx");
+    let (err, path, _dir) = check_cell_error(
+        "model = \"../models/cable_segmentation.onnx\"",
+        &format!(
+            "model = {:?}\nbusy_model = \"no-such-busy-model.onnx\"",
+            shipped.display().to_string()
+        ),
+    );
+    let line = line_of(&path, "no-such-busy-model.onnx");
+    assert!(
+        err.contains(&format!(
+            "{}:{line}:1: detector.backend.vision.busy_model: segmentation model",
+            path.display()
+        )) && err.contains("no-such-busy-model.onnx is missing or unreadable"),
+        "{err}"
+    );
+    assert_run_refuses_cell(&path, &err);
+}
+
 #[test]
 fn a_pitch_no_pad_has_is_refused_by_check_and_run_at_its_line() {
     for (pitch, shown) in [

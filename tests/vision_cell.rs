@@ -5,6 +5,8 @@
 
 mod common;
 
+use std::path::Path;
+
 use cablecell::cell::CellDevices;
 use cablecell::cell::load_cell;
 use cablecell::hw::DeviceError;
@@ -186,28 +188,66 @@ fn a_corrupt_model_is_a_clear_device_fault_and_the_run_keeps_its_record() {
             .collect::<Vec<_>>()
             .join("\n")
     });
-    let shipped = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
-    let prior = shipped
-        .find("\n# Where the cable roughly lies")
-        .expect("a prior");
-    let task = dir.path().join("no-prior.toml");
-    std::fs::write(&task, &shipped[..prior]).expect("write");
-    let out = common::cablecell(&[
-        "run",
-        common::text(&task),
-        "--cell",
-        common::text(&path),
-        "--seed",
-        "1",
-        "--json",
-        "--no-record",
-    ]);
+    let out = run_without_prior(dir.path(), &path, 1);
     assert_eq!(out.status.code(), Some(3));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["outcome"]["kind"], "fault");
     assert_eq!(report["outcome"]["state"], "detect");
     let reason = report["outcome"].to_string();
     assert!(reason.contains("broken.onnx"), "{reason}");
+}
+
+/// The regrasp task without its prior (so that a detector's fault ends
+/// the run, not a search by touch), run with seed `seed` on the cell file
+/// `cell`; the task is written into `dir`.
+fn run_without_prior(dir: &Path, cell: &Path, seed: u64) -> std::process::Output {
+    let shipped = std::fs::read_to_string(common::root().join("tasks/regrasp.toml")).unwrap();
+    let prior = shipped
+        .find("\n# Where the cable roughly lies")
+        .expect("a prior");
+    let task = dir.join("no-prior.toml");
+    std::fs::write(&task, &shipped[..prior]).expect("write");
+    common::cablecell(&[
+        "run",
+        common::text(&task),
+        "--cell",
+        common::text(cell),
+        "--seed",
+        &seed.to_string(),
+        "--json",
+        "--no-record",
+    ])
+}
+
+/// A cell's `busy_model` lies beside its cell file and sees the busy
+/// scenes only: the simulated workbench is plain enough at seed 1 and
+/// busy at seed 3 (docs/vision-record.md, "A network for busy scenes"), so a
+/// busy model that is no network ends the second run, naming it, and not
+/// the first.
+#[test]
+fn the_busy_scenes_model_beside_the_cell_file_sees_its_busy_scenes_only() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("busy.onnx"), "not a network").expect("write");
+    let path = common::sim_cell_copy(dir.path(), |text| {
+        let (head, tail) = text.split_once("\nmodel = ").expect("a model line");
+        format!("{head}\nbusy_model = \"busy.onnx\"\nmodel = {tail}")
+    });
+    let plain = run_without_prior(dir.path(), &path, 1);
+    assert_eq!(
+        plain.status.code(),
+        Some(0),
+        "seed 1: {}",
+        String::from_utf8_lossy(&plain.stdout)
+    );
+    let busy = run_without_prior(dir.path(), &path, 3);
+    assert_eq!(busy.status.code(), Some(3));
+    let report: serde_json::Value = serde_json::from_slice(&busy.stdout).expect("JSON");
+    assert_eq!(report["outcome"]["state"], "detect");
+    let reason = report["outcome"].to_string();
+    assert!(
+        reason.contains(&dir.path().join("busy.onnx").display().to_string()),
+        "{reason}"
+    );
 }
 
 fn gray_image(width: i32, height: i32) -> Mat {

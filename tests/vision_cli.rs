@@ -323,6 +323,15 @@ fn eval_vision_with_a_model_that_is_no_network_is_bad_input() {
         "/no/such/model.onnx",
     ]);
     assert!(stderr.contains("/no/such/model.onnx"), "{stderr}");
+    // The busy scenes' network is loaded beforehand too, whether or not a
+    // scene is busy.
+    let stderr = refused(&[
+        "eval-vision",
+        text(dir.path()),
+        "--busy-model",
+        "/no/such/busy-model.onnx",
+    ]);
+    assert!(stderr.contains("/no/such/busy-model.onnx"), "{stderr}");
 }
 
 /// The network and its runtime are found where the set-up put them from

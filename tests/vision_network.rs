@@ -1,7 +1,8 @@
 //! The segmentation network end to end: the shipped model through ONNX
 //! Runtime on images made here (a drawn cable on a plain and on a textured
 //! background), its agreement with the float network it was quantized
-//! from and with the mirrored network that wraps it, its errors (a missing
+//! from and with the mirrored network that wraps it, the busy scenes'
+//! network taking the busy scenes alone, its errors (a missing
 //! model, a model of another input type, a missing or invalid runtime
 //! library, a wrong image), and its accuracy on the held-out real
 //! photographs of cables-dev when that folder is beside the project.
@@ -15,10 +16,13 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::eval::{self, GroundTruth};
+use cablecell::perception::vision::mask::background_stats;
 use cablecell::perception::vision::network::{
-    DEFAULT_MODEL, FLOAT_MODEL, MIRRORED_MODEL, NetworkError, SegmentationNet,
+    BUSY_MODEL, DEFAULT_MODEL, FLOAT_MODEL, InputScales, LazyNetwork, MIRRORED_MODEL, NetworkError,
+    SegmentationNet,
 };
-use cablecell::perception::vision::{Pipeline, VisionConfig};
+use cablecell::perception::vision::{MaskNetwork, Pipeline, VisionConfig, VisionError};
+use cablecell::sim::render::Background;
 use opencv::core::{CV_8U, CV_8UC1, CV_8UC3, Mat, Point, Scalar, Vector};
 use opencv::prelude::*;
 use opencv::{imgcodecs, imgproc};
@@ -259,6 +263,84 @@ fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
         worst < 1e-4,
         "the mirrored network is {worst} from the mean of the two views"
     );
+}
+
+/// Given a network for busy scenes, a scene on paint goes to it and one
+/// on a plain table to the first network, each at the input scale its
+/// background asks for: the probabilities must be those of the network
+/// chosen, run alone.
+#[test]
+fn a_busy_scene_goes_to_the_busy_network_and_a_plain_one_to_the_first() {
+    let mut routed = LazyNetwork::new(model(), runtime_library())
+        .with_busy_model(Some(PathBuf::from(BUSY_MODEL)));
+    let (mut first, mut busy) = (net(), load(Path::new(BUSY_MODEL)));
+    let scales = InputScales::default();
+    let paint = common::scenes::draw_scene(480, 640, Background::Pollock, 0.0, Vec::new(), 5)
+        .expect("paint")
+        .bgr;
+    let table =
+        Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::new(205.0, 215.0, 220.0, 0.0))
+            .unwrap();
+    let red = Scalar::new(40.0, 40.0, 200.0, 0.0);
+    for (name, background, busy_scene) in [("paint", paint, true), ("table", table, false)] {
+        let image = draw_cable(background, red).0;
+        let stats = background_stats(&image).unwrap();
+        assert_eq!(stats.busy(), busy_scene, "{name}: {stats:?}");
+        let scale = if stats.closer_look() {
+            scales.close
+        } else {
+            scales.normal
+        };
+        first.input_scale = scale;
+        busy.input_scale = scale;
+        let seen = routed.mask(&image, &stats).unwrap();
+        let (by_first, by_busy) = (
+            first.probability(&image).unwrap(),
+            busy.probability(&image).unwrap(),
+        );
+        let apart = |a: &Mat, b: &Mat| {
+            a.data_typed::<f32>()
+                .unwrap()
+                .iter()
+                .zip(b.data_typed::<f32>().unwrap())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max)
+        };
+        let (chosen, other) = if busy_scene {
+            (&by_busy, &by_first)
+        } else {
+            (&by_first, &by_busy)
+        };
+        eprintln!(
+            "{name}: {} from the network chosen, {} from the other",
+            apart(&seen, chosen),
+            apart(&seen, other)
+        );
+        assert_eq!(
+            apart(&seen, chosen),
+            0.0,
+            "{name}: not the chosen network's"
+        );
+        assert!(
+            apart(&seen, other) > 0.01,
+            "{name}: the two networks agree: the test shows nothing"
+        );
+    }
+}
+
+/// A busy scenes' network that is missing is found when the networks are
+/// loaded, before any image, whatever the images.
+#[test]
+fn a_missing_busy_scenes_model_is_reported_on_loading() {
+    let missing = common::root().join("models/no-such-busy-model.onnx");
+    let mut routed =
+        LazyNetwork::new(model(), runtime_library()).with_busy_model(Some(missing.clone()));
+    match routed.load() {
+        Err(VisionError::Network {
+            source: NetworkError::ModelMissing { path, .. },
+        }) => assert_eq!(path, missing),
+        other => panic!("expected the busy model missing, got {other:?}"),
+    }
 }
 
 #[test]

@@ -9,8 +9,8 @@ mod common;
 use cablecell::perception::vision::curves::{arc_px, segment_px};
 use cablecell::perception::vision::eval::distance_to_polylines;
 use cablecell::perception::vision::{
-    InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError, VisionOutput,
-    mask,
+    BackgroundStats, InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError,
+    VisionOutput, mask,
 };
 use cablecell::sim::render::{Background, CableSpec, RenderedScene};
 use common::scenes::{demo_scene, draw_scene, matte_cable, midpoint_px};
@@ -965,8 +965,8 @@ impl KnownMask {
 }
 
 impl MaskNetwork for KnownMask {
-    fn mask(&mut self, _bgr: &Mat, closer: bool) -> Result<Mat, VisionError> {
-        self.closer.push(closer);
+    fn mask(&mut self, _bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError> {
+        self.closer.push(background.closer_look());
         Ok(self.mask.try_clone().expect("copy the known mask"))
     }
 }
@@ -1229,7 +1229,7 @@ fn a_busy_background_takes_the_network_or_says_it_fell_back() {
 struct RedAndTopEdge;
 
 impl MaskNetwork for RedAndTopEdge {
-    fn mask(&mut self, bgr: &Mat, _busy: bool) -> Result<Mat, VisionError> {
+    fn mask(&mut self, bgr: &Mat, _background: &BackgroundStats) -> Result<Mat, VisionError> {
         let mut red = Mat::default();
         core::in_range(
             bgr,

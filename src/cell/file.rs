@@ -42,6 +42,9 @@ impl CellFile {
     pub fn resolve_paths(&mut self, dir: &Path) {
         if let DetectorBackend::Vision(vision) = &mut self.detector.backend {
             vision.model = dir.join(&vision.model);
+            if let Some(busy_model) = &mut vision.busy_model {
+                *busy_model = dir.join(&*busy_model);
+            }
             if let Some(library) = &mut vision.onnxruntime {
                 *library = dir.join(&*library);
             }

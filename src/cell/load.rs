@@ -105,20 +105,35 @@ pub fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
         }
     }
     if vision.mask != MaskMethod::Classical {
-        let unreadable = match std::fs::metadata(&vision.model) {
-            Ok(meta) if meta.is_file() => None,
-            Ok(_) => Some("not a file".to_owned()),
-            Err(error) => Some(error.to_string()),
-        };
-        if let Some(reason) = unreadable {
-            return refuse(
-                &["detector", "backend", "vision", "model"],
+        let models = [
+            (
+                "model",
                 "detector.backend.vision.model",
-                format!(
-                    "segmentation model {} is missing or unreadable: {reason}",
-                    vision.model.display()
-                ),
-            );
+                Some(&vision.model),
+            ),
+            (
+                "busy_model",
+                "detector.backend.vision.busy_model",
+                vision.busy_model.as_ref(),
+            ),
+        ];
+        for (key, field, model) in models {
+            let Some(model) = model else { continue };
+            let unreadable = match std::fs::metadata(model) {
+                Ok(meta) if meta.is_file() => None,
+                Ok(_) => Some("not a file".to_owned()),
+                Err(error) => Some(error.to_string()),
+            };
+            if let Some(reason) = unreadable {
+                return refuse(
+                    &["detector", "backend", "vision", key],
+                    field,
+                    format!(
+                        "segmentation model {} is missing or unreadable: {reason}",
+                        model.display()
+                    ),
+                );
+            }
         }
     }
     Ok(cell)

@@ -33,6 +33,12 @@ pub struct VisionArgs {
     /// The segmentation network.
     #[arg(long, default_value = DEFAULT_MODEL)]
     pub model: PathBuf,
+    /// A second network for the scenes whose background is busy (paint,
+    /// prints, mosaics), e.g. models/cable_segmentation_busy.onnx, which
+    /// counts more cables right there (docs/vision.md); without it --model
+    /// sees every scene.
+    #[arg(long)]
+    pub busy_model: Option<PathBuf>,
     /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else the
     /// checkout's .setup/onnxruntime/).
     #[arg(long)]
@@ -176,6 +182,7 @@ impl VisionArgs {
             self.threshold,
             InputScales::new(self.net_scale, self.close_net_scale),
         )
+        .with_busy_model(self.busy_model.clone())
     }
 }
 
@@ -198,11 +205,16 @@ pub fn cell_vision_detector(path: &Path) -> Result<(CellFile, VisionDetectorConf
 
 /// Runs `pipeline` once on `image`, untimed, so that the times reported
 /// after it are a warmed-up pipeline's (loading the network is no image's
-/// time); the line that says what it cost. An error here recurs in the
-/// timed run, which reports it.
+/// time); the line that says what it cost. Where the image needed the
+/// network, the busy scenes' network is loaded too, whatever the image's
+/// background. An error here recurs in the timed run, which reports it.
 pub fn warm_up(pipeline: &mut Pipeline, network: &mut LazyNetwork, image: &Mat) -> String {
     let start = std::time::Instant::now();
-    let _ = pipeline.detect(image, Some(network));
+    if let Ok(output) = pipeline.detect(image, Some(network))
+        && output.mask_used == MaskMethod::Network
+    {
+        let _ = network.load();
+    }
     format!(
         "start-up: {:.1} ms (the first image run once, untimed: one-off set-up such as loading the network)",
         start.elapsed().as_secs_f64() * 1e3

@@ -80,6 +80,11 @@ pub struct VisionDetectorConfig {
     pub instances: InstanceMethod,
     /// The segmentation network, relative to the cell file.
     pub model: PathBuf,
+    /// A second network for the scenes whose background is busy (paint,
+    /// prints, mosaics), relative to the cell file; without it `model`
+    /// sees every scene.
+    #[serde(default)]
+    pub busy_model: Option<PathBuf>,
     /// The ONNX Runtime library, relative to the cell file (default:
     /// `$ORT_DYLIB_PATH`, else where the set-up puts it).
     #[serde(default)]
@@ -163,6 +168,7 @@ impl VisionDetectorConfig {
             DEFAULT_THRESHOLD,
             InputScales::new(self.net_scale, self.close_net_scale),
         )
+        .with_busy_model(self.busy_model.clone())
     }
 
     /// How image points become base-frame points for a camera at

@@ -28,7 +28,7 @@ use ort::session::Session;
 use ort::session::builder::GraphOptimizationLevel;
 use ort::value::{DynValueRef, PrimitiveTensorElementType, TensorElementType, TensorRef};
 
-use super::{MaskNetwork, VisionError};
+use super::{BackgroundStats, MaskNetwork, VisionError};
 
 /// Intra-op threads of a session: the cell's computer has two cores.
 const INTRA_THREADS: usize = 2;
@@ -543,6 +543,16 @@ pub const MIRRORED_MODEL: &str = concat!(
     "/models/cable_segmentation_mirrored.onnx"
 );
 
+/// The network for busy scenes (paint, prints, mosaics): two fine-tunes
+/// of the shipped one on more of them, averaged and quantized
+/// (`models/README.md`, "The network for busy scenes"). It counts more
+/// real cables over paint right but fewer on the photographs' tables, so
+/// it is named where wanted ([`LazyNetwork::with_busy_model`]).
+pub const BUSY_MODEL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/models/cable_segmentation_busy.onnx"
+);
+
 /// The ONNX Runtime library to load: `given`, else `$ORT_DYLIB_PATH`, else
 /// where the set-up puts it.
 pub fn runtime_library(given: Option<&Path>) -> PathBuf {
@@ -553,13 +563,17 @@ pub fn runtime_library(given: Option<&Path>) -> PathBuf {
 }
 
 /// The network, loaded the first time a scene needs it: a plain
-/// background never pays for it.
+/// background never pays for it. Given a second network for busy scenes
+/// ([`LazyNetwork::with_busy_model`]), that one sees the scenes whose
+/// background is busy (paint, prints, mosaics), the first all others.
 pub struct LazyNetwork {
     model: PathBuf,
+    busy_model: Option<PathBuf>,
     runtime_library: PathBuf,
     threshold: f32,
     input_scales: InputScales,
     loaded: Option<SegmentationNet>,
+    loaded_busy: Option<SegmentationNet>,
 }
 
 impl LazyNetwork {
@@ -567,10 +581,12 @@ impl LazyNetwork {
     pub fn new(model: PathBuf, runtime_library: PathBuf) -> Self {
         Self {
             model,
+            busy_model: None,
             runtime_library,
             threshold: DEFAULT_THRESHOLD,
             input_scales: InputScales::default(),
             loaded: None,
+            loaded_busy: None,
         }
     }
 
@@ -582,33 +598,69 @@ impl LazyNetwork {
             ..self
         }
     }
-}
 
-impl LazyNetwork {
-    /// The network, loaded now if it was not yet: a command that will need
-    /// it calls this first, so that a model that is no network or a
-    /// missing runtime is found before any image, whatever the images.
-    pub fn load(&mut self) -> Result<&mut SegmentationNet, VisionError> {
-        let net = match self.loaded.take() {
-            Some(net) => net,
-            None => {
-                let mut net = SegmentationNet::load(&self.model, &self.runtime_library)
-                    .map_err(|source| VisionError::Network { source })?;
-                net.threshold = self.threshold;
-                net.input_scale = self.input_scales.normal;
-                net
-            }
-        };
-        Ok(self.loaded.insert(net))
+    /// The same with `busy_model`, when given, for the scenes whose
+    /// background is busy ([`BackgroundStats::busy`]): a network trained
+    /// more on them (`models/README.md`, "The network for busy scenes").
+    pub fn with_busy_model(self, busy_model: Option<PathBuf>) -> Self {
+        Self { busy_model, ..self }
+    }
+
+    /// The network, and the busy scenes' one when given, loaded now if
+    /// they were not yet: a command that will need them calls this first,
+    /// so that a model that is no network or a missing runtime is found
+    /// before any image, whatever the images.
+    pub fn load(&mut self) -> Result<(), VisionError> {
+        if let Some(busy_model) = &self.busy_model {
+            loaded(
+                &mut self.loaded_busy,
+                busy_model,
+                &self.runtime_library,
+                self.threshold,
+            )?;
+        }
+        loaded(
+            &mut self.loaded,
+            &self.model,
+            &self.runtime_library,
+            self.threshold,
+        )?;
+        Ok(())
     }
 }
 
+/// The network in `slot`, loaded from `model` first if the slot is empty.
+fn loaded<'a>(
+    slot: &'a mut Option<SegmentationNet>,
+    model: &Path,
+    runtime_library: &Path,
+    threshold: f32,
+) -> Result<&'a mut SegmentationNet, VisionError> {
+    let net = match slot.take() {
+        Some(net) => net,
+        None => {
+            let mut net = SegmentationNet::load(model, runtime_library)
+                .map_err(|source| VisionError::Network { source })?;
+            net.threshold = threshold;
+            net
+        }
+    };
+    Ok(slot.insert(net))
+}
+
 impl MaskNetwork for LazyNetwork {
-    fn mask(&mut self, bgr: &Mat, closer: bool) -> Result<Mat, VisionError> {
-        let scales = self.input_scales;
-        let net = self.load()?;
-        net.input_scale = if closer { scales.close } else { scales.normal };
-        MaskNetwork::mask(net, bgr, closer)
+    fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError> {
+        let (slot, model) = match &self.busy_model {
+            Some(busy_model) if background.busy() => (&mut self.loaded_busy, busy_model),
+            _ => (&mut self.loaded, &self.model),
+        };
+        let net = loaded(slot, model, &self.runtime_library, self.threshold)?;
+        net.input_scale = if background.closer_look() {
+            self.input_scales.close
+        } else {
+            self.input_scales.normal
+        };
+        MaskNetwork::mask(net, bgr, background)
     }
 
     fn threshold(&self) -> f64 {
@@ -620,8 +672,9 @@ impl MaskNetwork for LazyNetwork {
 /// pipeline cuts at [`SegmentationNet::threshold`] and which weigh each
 /// detection's confidence.
 impl MaskNetwork for SegmentationNet {
-    /// At its one [`SegmentationNet::input_scale`], closer or not.
-    fn mask(&mut self, bgr: &Mat, _closer: bool) -> Result<Mat, VisionError> {
+    /// At its one [`SegmentationNet::input_scale`], whatever the
+    /// background.
+    fn mask(&mut self, bgr: &Mat, _background: &BackgroundStats) -> Result<Mat, VisionError> {
         self.probability(bgr)
             .map_err(|source| VisionError::Network { source })
     }

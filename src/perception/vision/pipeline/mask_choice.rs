@@ -18,11 +18,11 @@ pub trait MaskNetwork {
     /// The cables' mask for a BGR 8-bit image: one channel, the image's size
     /// (or any size: it is resized), 8-bit 0/255 (or 0/1) or 32-bit float
     /// probabilities. Probabilities also tell each detection's confidence
-    /// how sure the network was of it. `closer`: the image's background is
-    /// far from one colour or dark
-    /// ([`mask::BackgroundStats::closer_look`]), where a network may look
-    /// closer.
-    fn mask(&mut self, bgr: &Mat, closer: bool) -> Result<Mat, VisionError>;
+    /// how sure the network was of it. `background`: the image's
+    /// background, where a network may look closer
+    /// ([`BackgroundStats::closer_look`]) or hand a busy scene to a network
+    /// of its own ([`BackgroundStats::busy`]).
+    fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError>;
 
     /// The probability above which a pixel is cable, for a network that
     /// gives probabilities.
@@ -63,9 +63,8 @@ pub(super) fn choose_mask(
     notes: &mut Vec<String>,
 ) -> Result<MaskChoice, VisionError> {
     let background = mask::background_stats(work)?;
-    let closer = background.closer_look();
     let network_mask =
-        |net: &mut dyn MaskNetwork| network_mask(net, work, view, closer, min_blob_area_px);
+        |net: &mut dyn MaskNetwork| network_mask(net, work, view, &background, min_blob_area_px);
     let (found, used, background) = match (method, network) {
         (MaskMethod::Network, None) => return Err(VisionError::NoNetwork),
         (MaskMethod::Network, Some(net)) => (network_mask(net)?, MaskMethod::Network, background),
@@ -112,22 +111,22 @@ pub(super) fn choose_mask(
     })
 }
 
-/// The network's mask of `work` (seen within `view` when given; `closer`:
-/// its background is far from one colour or dark), binarized to its size
+/// The network's mask of `work` (seen within `view` when given; of
+/// `background`), binarized to its size
 /// and cleaned of blobs smaller than `min_blob_area_px`, with its
 /// probabilities if it gave them.
 fn network_mask(
     net: &mut dyn MaskNetwork,
     work: &Mat,
     view: Option<&NetworkView>,
-    closer: bool,
+    background: &BackgroundStats,
     min_blob_area_px: f64,
 ) -> Result<(Mat, Option<Belief>), VisionError> {
     let raw = match view {
-        None => net.mask(work, closer)?,
+        None => net.mask(work, background)?,
         Some(view) => {
             let size = view.image.size().map_err(cv("image size"))?;
-            let seen = mask::at_size(net.mask(&view.image, closer)?, size)?;
+            let seen = mask::at_size(net.mask(&view.image, background)?, size)?;
             Mat::roi(&seen, view.region)
                 .and_then(|region| region.try_clone())
                 .map_err(cv("cut the region of interest from the network's view"))?
