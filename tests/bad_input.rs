@@ -289,31 +289,29 @@ fn a_region_of_interest_outside_the_camera_image_is_refused_at_its_line() {
     }
 }
 
-#[test]
-fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
-    let (err, path, _dir) = check_cell_error("cable_segmentation.onnx", "no-such-model.onnx");
-    let line = line_of(&path, "no-such-model.onnx");
+/// Asserts that the shipped cell with `from` replaced by `to`, which names
+/// the model file `missing` under `detector.backend.vision.KEY`, is
+/// refused by `check` at that line, and by `run` before the cell moves.
+fn assert_missing_model_refused(from: &str, to: &str, key: &str, missing: &str) {
+    let (err, path, _dir) = check_cell_error(from, to);
+    let line = line_of(&path, missing);
     assert!(
         err.contains(&format!(
-            "{}:{line}:1: detector.backend.vision.model: segmentation model",
+            "{}:{line}:1: detector.backend.vision.{key}: segmentation model",
             path.display()
-        )) && err.contains("no-such-model.onnx is missing or unreadable"),
+        )) && err.contains(&format!("{missing} is missing or unreadable")),
         "{err}"
     );
-    let run = cablecell(&[
-        "run",
-        "tasks/regrasp.toml",
-        "--cell",
-        path.to_str().expect("utf-8 path"),
-        "--seed",
-        "1",
-    ]);
-    assert_eq!(run.status.code(), Some(BAD_INPUT));
-    assert_eq!(String::from_utf8_lossy(&run.stderr), err);
-    assert!(
-        run.stdout.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&run.stdout)
+    assert_run_refuses_cell(&path, &err);
+}
+
+#[test]
+fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
+    assert_missing_model_refused(
+        "cable_segmentation.onnx",
+        "no-such-model.onnx",
+        "model",
+        "no-such-model.onnx",
     );
 }
 
@@ -322,22 +320,15 @@ fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
 #[test]
 fn a_missing_busy_scenes_model_is_refused_at_its_line_before_the_cell_moves() {
     let shipped = root().join("models/cable_segmentation.onnx");
-    let (err, path, _dir) = check_cell_error(
+    assert_missing_model_refused(
         "model = \"../models/cable_segmentation.onnx\"",
         &format!(
             "model = {:?}\nbusy_model = \"no-such-busy-model.onnx\"",
             shipped.display().to_string()
         ),
+        "busy_model",
+        "no-such-busy-model.onnx",
     );
-    let line = line_of(&path, "no-such-busy-model.onnx");
-    assert!(
-        err.contains(&format!(
-            "{}:{line}:1: detector.backend.vision.busy_model: segmentation model",
-            path.display()
-        )) && err.contains("no-such-busy-model.onnx is missing or unreadable"),
-        "{err}"
-    );
-    assert_run_refuses_cell(&path, &err);
 }
 
 #[test]

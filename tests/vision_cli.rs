@@ -316,22 +316,15 @@ fn eval_vision_with_a_model_that_is_no_network_is_bad_input() {
             "{more:?}: {stderr}"
         );
     }
-    let stderr = refused(&[
-        "eval-vision",
-        text(dir.path()),
-        "--model",
-        "/no/such/model.onnx",
-    ]);
-    assert!(stderr.contains("/no/such/model.onnx"), "{stderr}");
     // The busy scenes' network is loaded beforehand too, whether or not a
     // scene is busy.
-    let stderr = refused(&[
-        "eval-vision",
-        text(dir.path()),
-        "--busy-model",
-        "/no/such/busy-model.onnx",
-    ]);
-    assert!(stderr.contains("/no/such/busy-model.onnx"), "{stderr}");
+    for (option, missing) in [
+        ("--model", "/no/such/model.onnx"),
+        ("--busy-model", "/no/such/busy-model.onnx"),
+    ] {
+        let stderr = refused(&["eval-vision", text(dir.path()), option, missing]);
+        assert!(stderr.contains(missing), "{option}: {stderr}");
+    }
 }
 
 /// The network and its runtime are found where the set-up put them from
