@@ -41,6 +41,37 @@ fn write_scene(dir: &Path, stem: &str, cables: Vec<CableSpec>, truth: bool) -> P
     path
 }
 
+/// On paint the report says the background is busy: where a network
+/// named with `--busy-model` makes the mask.
+#[test]
+fn detect_reports_a_busy_background() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = draw_scene(
+        480,
+        640,
+        Background::Pollock,
+        0.0,
+        vec![cable([100.0, 100.0], [540.0, 380.0])],
+        5,
+    )
+    .expect("scene");
+    let path = dir.path().join("paint.jpg");
+    assert!(imgcodecs::imwrite(text(&path), &scene.bgr, &Vector::new()).expect("write"));
+    let busy_model = common::root().join("models/cable_segmentation_busy.onnx");
+    let reports = json_of(&[
+        "detect",
+        text(&path),
+        "--busy-model",
+        text(&busy_model),
+        "--json",
+    ]);
+    common::assert_follows_schema("detect", &reports);
+    let report = &reports["images"][0];
+    assert_eq!(report["mask_used"], "network");
+    assert_eq!(report["plain_background"], false);
+    assert_eq!(report["busy_background"], true);
+}
+
 #[test]
 fn detect_finds_one_cable_its_grasp_point_and_direction() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -68,6 +99,7 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     let report = &reports["images"][0];
     assert_eq!(report["mask_used"], "classical");
     assert_eq!(report["plain_background"], true);
+    assert_eq!(report["busy_background"], false);
     let cables = report["cables"].as_array().expect("cables");
     assert_eq!(cables.len(), 1);
     let grasp = &cables[0]["grasp_px"];

@@ -31,6 +31,10 @@ pub struct ImageReport {
     image: String,
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
+    /// Whether the background is busy (paint, prints, mosaics): scraps and
+    /// straight detections are judged otherwise there, and a network
+    /// named for busy scenes (`--busy-model`) made the mask.
+    busy_background: bool,
     /// The image's size as worked on over its own.
     work_scale: f64,
     cables: Vec<CableInstance>,
@@ -144,6 +148,7 @@ pub fn detect(
             image: path.display().to_string(),
             mask_used: output.mask_used,
             plain_background: output.plain_background,
+            busy_background: output.background.busy(),
             work_scale: output.work_scale,
             cables: output.cables.clone(),
             grasp_frames_in_base: output
@@ -209,6 +214,8 @@ fn print_report(report: &ImageReport) {
         report.mask_used,
         if report.plain_background {
             " (plain background)"
+        } else if report.busy_background {
+            " (busy background)"
         } else {
             ""
         },
