@@ -23,15 +23,24 @@ fn cable(from: [f64; 2], to: [f64; 2]) -> CableSpec {
 /// Draws `cables` on a plain light background into DIR/STEM.jpg, with the
 /// cables-dev ground truth beside it when `truth` is set.
 fn write_scene(dir: &Path, stem: &str, cables: Vec<CableSpec>, truth: bool) -> PathBuf {
-    let scene = draw_scene(
-        480,
-        640,
+    write_scene_over(
+        dir,
+        stem,
         Background::Plain { bgr: [200; 3] },
-        0.0,
         cables,
-        7,
+        truth,
     )
-    .expect("scene");
+}
+
+/// [`write_scene`] over `background`.
+fn write_scene_over(
+    dir: &Path,
+    stem: &str,
+    background: Background,
+    cables: Vec<CableSpec>,
+    truth: bool,
+) -> PathBuf {
+    let scene = draw_scene(480, 640, background, 0.0, cables, 7).expect("scene");
     let path = dir.join(format!("{stem}.jpg"));
     if truth {
         write_scene_files(dir, stem, &scene).expect("write scene");
@@ -41,35 +50,29 @@ fn write_scene(dir: &Path, stem: &str, cables: Vec<CableSpec>, truth: bool) -> P
     path
 }
 
-/// On paint the report says the background is busy: where a network
-/// named with `--busy-model` makes the mask.
+/// Each image's report says whether its background is plain or busy:
+/// on paint, a network named with `--busy-model` makes the mask.
 #[test]
-fn detect_reports_a_busy_background() {
+fn detect_says_whether_the_background_is_plain_or_busy() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scene = draw_scene(
-        480,
-        640,
-        Background::Pollock,
-        0.0,
-        vec![cable([100.0, 100.0], [540.0, 380.0])],
-        5,
-    )
-    .expect("scene");
-    let path = dir.path().join("paint.jpg");
-    assert!(imgcodecs::imwrite(text(&path), &scene.bgr, &Vector::new()).expect("write"));
     let busy_model = common::root().join("models/cable_segmentation_busy.onnx");
-    let reports = json_of(&[
-        "detect",
-        text(&path),
-        "--busy-model",
-        text(&busy_model),
-        "--json",
-    ]);
-    common::assert_follows_schema("detect", &reports);
-    let report = &reports["images"][0];
-    assert_eq!(report["mask_used"], "network");
-    assert_eq!(report["plain_background"], false);
-    assert_eq!(report["busy_background"], true);
+    for (stem, background, plain, busy) in [
+        ("table", Background::Plain { bgr: [200; 3] }, true, false),
+        ("paint", Background::Pollock, false, true),
+    ] {
+        let cables = vec![cable([100.0, 100.0], [540.0, 380.0])];
+        let path = write_scene_over(dir.path(), stem, background, cables, false);
+        let reports = json_of(&[
+            "detect",
+            text(&path),
+            "--busy-model",
+            text(&busy_model),
+            "--json",
+        ]);
+        let report = &reports["images"][0];
+        assert_eq!(report["plain_background"], plain, "{stem}");
+        assert_eq!(report["busy_background"], busy, "{stem}");
+    }
 }
 
 #[test]
@@ -99,7 +102,6 @@ fn detect_finds_one_cable_its_grasp_point_and_direction() {
     let report = &reports["images"][0];
     assert_eq!(report["mask_used"], "classical");
     assert_eq!(report["plain_background"], true);
-    assert_eq!(report["busy_background"], false);
     let cables = report["cables"].as_array().expect("cables");
     assert_eq!(cables.len(), 1);
     let grasp = &cables[0]["grasp_px"];
