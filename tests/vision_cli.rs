@@ -9,6 +9,7 @@ mod common;
 use common::{cablecell, json_of, text};
 
 use cablecell::perception::vision::curves::segment_px;
+use cablecell::perception::vision::network::BUSY_MODEL;
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
 use common::scenes::{draw_scene, matte_cable};
 use opencv::core::Vector;
@@ -55,20 +56,13 @@ fn write_scene_over(
 #[test]
 fn detect_says_whether_the_background_is_plain_or_busy() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let busy_model = common::root().join("models/cable_segmentation_busy.onnx");
     for (stem, background, plain, busy) in [
         ("table", Background::Plain { bgr: [200; 3] }, true, false),
         ("paint", Background::Pollock, false, true),
     ] {
         let cables = vec![cable([100.0, 100.0], [540.0, 380.0])];
         let path = write_scene_over(dir.path(), stem, background, cables, false);
-        let reports = json_of(&[
-            "detect",
-            text(&path),
-            "--busy-model",
-            text(&busy_model),
-            "--json",
-        ]);
+        let reports = json_of(&["detect", text(&path), "--busy-model", BUSY_MODEL, "--json"]);
         let report = &reports["images"][0];
         assert_eq!(report["plain_background"], plain, "{stem}");
         assert_eq!(report["busy_background"], busy, "{stem}");

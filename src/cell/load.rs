@@ -106,18 +106,10 @@ pub fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
     }
     if vision.mask != MaskMethod::Classical {
         let models = [
-            (
-                "model",
-                "detector.backend.vision.model",
-                Some(&vision.model),
-            ),
-            (
-                "busy_model",
-                "detector.backend.vision.busy_model",
-                vision.busy_model.as_ref(),
-            ),
+            ("model", Some(&vision.model)),
+            ("busy_model", vision.busy_model.as_ref()),
         ];
-        for (key, field, model) in models {
+        for (key, model) in models {
             let Some(model) = model else { continue };
             let unreadable = match std::fs::metadata(model) {
                 Ok(meta) if meta.is_file() => None,
@@ -127,7 +119,7 @@ pub fn parse_cell(path: &Path, text: &str) -> Result<CellFile, ConfigError> {
             if let Some(reason) = unreadable {
                 return refuse(
                     &["detector", "backend", "vision", key],
-                    field,
+                    &format!("detector.backend.vision.{key}"),
                     format!(
                         "segmentation model {} is missing or unreadable: {reason}",
                         model.display()
