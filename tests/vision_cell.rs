@@ -219,29 +219,33 @@ fn run_without_prior(dir: &Path, cell: &Path, seed: u64) -> std::process::Output
     ])
 }
 
-/// A cell's `busy_model` lies beside its cell file and sees the busy
-/// scenes only: the simulated workbench is plain enough at seed 1 and
-/// busy at seed 3 (docs/vision-record.md, "A network for busy scenes"), so a
-/// busy model that is no network ends the second run, naming it, and not
-/// the first.
+/// A cell's `busy_model` lies beside its cell file and sees the painted
+/// scenes only: the simulated workbench is busy at seed 3
+/// (docs/vision-record.md, "A network for busy scenes") but of one hue,
+/// so a busy model that is no network leaves that run alone, and ends
+/// the run over a Pollock-like painting, naming it.
 #[test]
-fn the_busy_scenes_model_beside_the_cell_file_sees_its_busy_scenes_only() {
+fn the_busy_scenes_model_beside_the_cell_file_sees_its_painted_scenes_only() {
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("busy.onnx"), "not a network").expect("write");
-    let path = common::sim_cell_copy(dir.path(), |text| {
+    let with_busy_model = |text: String| {
         let (head, tail) = text.split_once("\nmodel = ").expect("a model line");
         format!("{head}\nbusy_model = \"busy.onnx\"\nmodel = {tail}")
-    });
-    let plain = run_without_prior(dir.path(), &path, 1);
+    };
+    let path = common::sim_cell_copy(dir.path(), with_busy_model);
+    let wood = run_without_prior(dir.path(), &path, 3);
     assert_eq!(
-        plain.status.code(),
+        wood.status.code(),
         Some(0),
-        "seed 1: {}",
-        String::from_utf8_lossy(&plain.stdout)
+        "wood: {}",
+        String::from_utf8_lossy(&wood.stdout)
     );
-    let busy = run_without_prior(dir.path(), &path, 3);
-    assert_eq!(busy.status.code(), Some(3));
-    let report: serde_json::Value = serde_json::from_slice(&busy.stdout).expect("JSON");
+    let path = common::sim_cell_copy(dir.path(), |text| {
+        with_busy_model(text).replace("background = \"wood\"", "background = \"pollock\"")
+    });
+    let paint = run_without_prior(dir.path(), &path, 3);
+    assert_eq!(paint.status.code(), Some(3));
+    let report: serde_json::Value = serde_json::from_slice(&paint.stdout).expect("JSON");
     assert_eq!(report["outcome"]["state"], "detect");
     let reason = report["outcome"].to_string();
     assert!(

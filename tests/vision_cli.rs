@@ -51,10 +51,10 @@ fn write_scene_over(
     path
 }
 
-/// Each image's report says whether its background is plain or busy:
-/// on paint, a network named with `--busy-model` makes the mask.
+/// Each image's report says whether its background is plain, busy or
+/// painted, where the network for busy scenes makes the mask.
 #[test]
-fn detect_says_whether_the_background_is_plain_or_busy() {
+fn detect_says_whether_the_background_is_plain_busy_or_painted() {
     let dir = tempfile::tempdir().expect("tempdir");
     for (stem, background, plain, busy) in [
         ("table", Background::Plain { bgr: [200; 3] }, true, false),
@@ -66,6 +66,7 @@ fn detect_says_whether_the_background_is_plain_or_busy() {
         let report = &reports["images"][0];
         assert_eq!(report["plain_background"], plain, "{stem}");
         assert_eq!(report["busy_background"], busy, "{stem}");
+        assert_eq!(report["painted_background"], busy, "{stem}");
     }
 }
 

@@ -265,12 +265,12 @@ fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
     );
 }
 
-/// Given a network for busy scenes, a scene on paint goes to it and one
-/// on a plain table to the first network, each at the input scale its
-/// background asks for: the probabilities must be those of the network
-/// chosen, run alone.
+/// Given a network for busy scenes, a scene on paint goes to it, and one
+/// on a plain table or on wood (busy, but of one hue) to the first
+/// network, each at the input scale its background asks for: the
+/// probabilities must be those of the network chosen, run alone.
 #[test]
-fn a_busy_scene_goes_to_the_busy_network_and_a_plain_one_to_the_first() {
+fn a_painted_scene_goes_to_the_busy_network_and_wood_or_a_plain_one_to_the_first() {
     let mut routed = LazyNetwork::new(model(), runtime_library())
         .with_busy_model(Some(PathBuf::from(BUSY_MODEL)));
     let (mut first, mut busy) = (net(), load(Path::new(BUSY_MODEL)));
@@ -281,11 +281,25 @@ fn a_busy_scene_goes_to_the_busy_network_and_a_plain_one_to_the_first() {
     let table =
         Mat::new_rows_cols_with_default(480, 640, CV_8UC3, Scalar::new(205.0, 215.0, 220.0, 0.0))
             .unwrap();
+    // Seed 1: a grain busy by its edges.
+    let wood = common::scenes::draw_scene(480, 640, Background::Wood, 0.0, Vec::new(), 1)
+        .expect("wood")
+        .bgr;
     let red = Scalar::new(40.0, 40.0, 200.0, 0.0);
-    for (name, background, busy_scene) in [("paint", paint, true), ("table", table, false)] {
+    for (name, background, busy_scene) in [
+        ("paint", paint, true),
+        ("table", table, false),
+        ("wood", wood, false),
+    ] {
         let image = draw_cable(background, red).0;
         let stats = background_stats(&image).unwrap();
-        assert_eq!(stats.busy(), busy_scene, "{name}: {stats:?}");
+        assert_eq!(stats.painted(), busy_scene, "{name}: {stats:?}");
+        if name == "wood" {
+            assert!(
+                stats.busy(),
+                "wood: not busy, so the test shows nothing: {stats:?}"
+            );
+        }
         let scale = if stats.closer_look() {
             scales.close
         } else {

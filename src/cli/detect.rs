@@ -31,10 +31,13 @@ pub struct ImageReport {
     image: String,
     mask_used: cablecell::perception::vision::MaskMethod,
     plain_background: bool,
-    /// Whether the background is busy (paint, prints, mosaics): scraps and
-    /// straight detections are judged otherwise there, and a network
-    /// named for busy scenes (`--busy-model`) made the mask.
+    /// Whether the background is busy (paint, prints, mosaics, a wood's
+    /// grain): scraps and straight detections are judged otherwise there.
     busy_background: bool,
+    /// Whether the background is painted (busy and of many colours), where
+    /// the network for busy scenes (`--busy-model`, a cell's `busy_model`)
+    /// makes the network's mask.
+    painted_background: bool,
     /// The image's size as worked on over its own.
     work_scale: f64,
     cables: Vec<CableInstance>,
@@ -149,6 +152,7 @@ pub fn detect(
             mask_used: output.mask_used,
             plain_background: output.plain_background,
             busy_background: output.background.busy(),
+            painted_background: output.background.painted(),
             work_scale: output.work_scale,
             cables: output.cables.clone(),
             grasp_frames_in_base: output
@@ -214,6 +218,8 @@ fn print_report(report: &ImageReport) {
         report.mask_used,
         if report.plain_background {
             " (plain background)"
+        } else if report.painted_background {
+            " (painted background)"
         } else if report.busy_background {
             " (busy background)"
         } else {

@@ -74,6 +74,14 @@ pub const BUSY_MAX_NEAR_FRACTION: f64 = 0.4;
 /// off (docs/vision-record.md, "Paint on a bare canvas is busy").
 pub const BUSY_MIN_EDGE_FRACTION: f64 = 0.08;
 
+/// A busy background is painted (paint, prints, mosaics of many colours)
+/// where at least this share of its pixels differ from its median colour
+/// in hue alone (a\*, b\*) by more than [`PLAIN_NEAR_LAB`]. A wooden
+/// table's grain, busy by its lightness, is of one hue and stays under it,
+/// as do the cables on it; paint and prints of several colours lie above
+/// (docs/vision-record.md, "Painted, not only busy", gives the figures).
+pub const PAINTED_MIN_OFF_HUE_FRACTION: f64 = 0.08;
+
 /// Canny's two thresholds on the plain test's lightness (8-bit, L·255/100)
 /// for [`BUSY_MIN_EDGE_FRACTION`]: OpenCV's common 1 : 3, at a step that
 /// a stroke of paint or a cable's outline makes and a table's grain does
@@ -138,6 +146,10 @@ pub struct BackgroundStats {
     /// measured only where it decides [`BackgroundStats::busy`]: neither
     /// plain nor busy by its share near the median colour.
     pub edge_fraction: Option<f64>,
+    /// Fraction of pixels whose hue alone lies farther than
+    /// [`PLAIN_NEAR_LAB`] from that colour's (see
+    /// [`PAINTED_MIN_OFF_HUE_FRACTION`]).
+    pub off_hue_fraction: f64,
     /// Whether the background counts as plain (`near_fraction >=
     /// PLAIN_MIN_FRACTION`).
     pub plain: bool,
@@ -158,6 +170,13 @@ impl BackgroundStats {
             || self
                 .edge_fraction
                 .is_some_and(|edges| edges >= BUSY_MIN_EDGE_FRACTION)
+    }
+
+    /// Whether the background is busy and of many colours: paint, prints,
+    /// mosaics, which a network for busy scenes sees
+    /// ([`PAINTED_MIN_OFF_HUE_FRACTION`]); not a table's grain.
+    pub fn painted(&self) -> bool {
+        self.busy() && self.off_hue_fraction >= PAINTED_MIN_OFF_HUE_FRACTION
     }
 
     /// Whether the network should look closer at the image: its
@@ -301,6 +320,7 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
         background_lab,
         near_fraction,
         edge_fraction: None,
+        off_hue_fraction: off_hue_fraction(bytes, background_lab),
         plain: near_fraction >= PLAIN_MIN_FRACTION,
         threshold_lab: 0.0,
         ambiguous_ratio: 0.0,
@@ -309,6 +329,20 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
         stats.edge_fraction = Some(edge_fraction(&lab)?);
     }
     Ok(stats)
+}
+
+/// The share of the Lab pixels in `bytes` whose hue (a\*, b\*) lies
+/// farther than [`PLAIN_NEAR_LAB`] from `background_lab`'s.
+fn off_hue_fraction(bytes: &[u8], background_lab: [f64; 3]) -> f64 {
+    let off_hue = bytes
+        .chunks_exact(3)
+        .filter(|px| {
+            let da = f64::from(px[1]) - background_lab[1];
+            let db = f64::from(px[2]) - background_lab[2];
+            da.hypot(db) > PLAIN_NEAR_LAB
+        })
+        .count();
+    off_hue as f64 / (bytes.len() / 3).max(1) as f64
 }
 
 /// The share of `lab`'s pixels on an edge of its lightness (OpenCV's
@@ -932,6 +966,29 @@ mod tests {
         assert!(bare.plain && bare.edge_fraction.is_none(), "{bare:?}");
         let dense = background_stats(&paint_on_canvas(3000)).unwrap();
         assert!(dense.busy() && dense.edge_fraction.is_none(), "{dense:?}");
+    }
+
+    #[test]
+    fn paint_of_many_colours_is_painted_and_a_wooden_grain_only_busy() {
+        for strokes in [400, 3000] {
+            let paint = background_stats(&paint_on_canvas(strokes)).unwrap();
+            assert!(paint.painted(), "{strokes} strokes: {paint:?}");
+        }
+        let bare = background_stats(&paint_on_canvas(0)).unwrap();
+        assert!(!bare.painted(), "{bare:?}");
+        // A brown table whose grain waves its lightness by a third either
+        // way, in bands 12 px apart: busy, and of one hue.
+        let mut wood = flat_640x480([0.0; 3]);
+        for y in 0..480 {
+            for x in 0..640 {
+                let along = f64::from(y) + 8.0 * (f64::from(x) / 40.0).sin();
+                let shade = 1.0 + 0.35 * (std::f64::consts::TAU * along / 12.0).sin();
+                let bgr = [60.0, 110.0, 170.0].map(|c: f64| (c * shade).round() as u8);
+                *wood.at_2d_mut::<core::Vec3b>(y, x).unwrap() = core::Vec3b::from(bgr);
+            }
+        }
+        let grain = background_stats(&wood).unwrap();
+        assert!(grain.busy() && !grain.painted(), "{grain:?}");
     }
 
     #[test]

@@ -546,8 +546,9 @@ pub const MIRRORED_MODEL: &str = concat!(
 /// The network for busy scenes (paint, prints, mosaics): two fine-tunes
 /// of the shipped one on more of them, averaged and quantized
 /// (`models/README.md`, "The network for busy scenes"). It counts more
-/// real cables over paint right but fewer on the photographs' tables, so
-/// it is named where wanted ([`LazyNetwork::with_busy_model`]).
+/// real cables over paint right but fewer on the photographs' tables and
+/// grasps worse on a workbench, so it sees the painted scenes alone
+/// ([`LazyNetwork::with_busy_model`]).
 pub const BUSY_MODEL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/models/cable_segmentation_busy.onnx"
@@ -565,7 +566,8 @@ pub fn runtime_library(given: Option<&Path>) -> PathBuf {
 /// The network, loaded the first time a scene needs it: a plain
 /// background never pays for it. Given a second network for busy scenes
 /// ([`LazyNetwork::with_busy_model`]), that one sees the scenes whose
-/// background is busy (paint, prints, mosaics), the first all others.
+/// background is painted (busy and of many colours: paint, prints,
+/// mosaics), the first all others.
 pub struct LazyNetwork {
     model: PathBuf,
     busy_model: Option<PathBuf>,
@@ -600,7 +602,7 @@ impl LazyNetwork {
     }
 
     /// The same with `busy_model`, when given, for the scenes whose
-    /// background is busy ([`BackgroundStats::busy`]): a network trained
+    /// background is painted ([`BackgroundStats::painted`]): a network trained
     /// more on them (`models/README.md`, "The network for busy scenes").
     pub fn with_busy_model(self, busy_model: Option<PathBuf>) -> Self {
         Self { busy_model, ..self }
@@ -651,7 +653,7 @@ fn loaded<'a>(
 impl MaskNetwork for LazyNetwork {
     fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError> {
         let (slot, model) = match &self.busy_model {
-            Some(busy_model) if background.busy() => (&mut self.loaded_busy, busy_model),
+            Some(busy_model) if background.painted() => (&mut self.loaded_busy, busy_model),
             _ => (&mut self.loaded, &self.model),
         };
         let net = loaded(slot, model, &self.runtime_library, self.threshold)?;
