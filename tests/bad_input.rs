@@ -316,14 +316,14 @@ fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
 }
 
 /// The busy scenes' network is checked as the first one is: a run that
-/// would meet a busy scene halfway through must not start without it.
+/// would meet a painted scene halfway through must not start without it.
 #[test]
 fn a_missing_busy_scenes_model_is_refused_at_its_line_before_the_cell_moves() {
     let shipped = root().join("models/cable_segmentation.onnx");
     assert_missing_model_refused(
-        "model = \"../models/cable_segmentation.onnx\"",
+        "\"../models/cable_segmentation.onnx\"\nbusy_model = \"../models/cable_segmentation_busy.onnx\"",
         &format!(
-            "model = {:?}\nbusy_model = \"no-such-busy-model.onnx\"",
+            "{:?}\nbusy_model = \"no-such-busy-model.onnx\"",
             shipped.display().to_string()
         ),
         "busy_model",

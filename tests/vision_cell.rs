@@ -228,9 +228,12 @@ fn run_without_prior(dir: &Path, cell: &Path, seed: u64) -> std::process::Output
 fn the_busy_scenes_model_beside_the_cell_file_sees_its_painted_scenes_only() {
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("busy.onnx"), "not a network").expect("write");
+    let shipped = common::root().join("models/cable_segmentation_busy.onnx");
     let with_busy_model = |text: String| {
-        let (head, tail) = text.split_once("\nmodel = ").expect("a model line");
-        format!("{head}\nbusy_model = \"busy.onnx\"\nmodel = {tail}")
+        let (head, tail) = text
+            .split_once(&shipped.display().to_string())
+            .expect("the shipped busy model");
+        format!("{head}busy.onnx{tail}")
     };
     let path = common::sim_cell_copy(dir.path(), with_busy_model);
     let wood = run_without_prior(dir.path(), &path, 3);

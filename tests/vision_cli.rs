@@ -9,7 +9,7 @@ mod common;
 use common::{cablecell, json_of, text};
 
 use cablecell::perception::vision::curves::segment_px;
-use cablecell::perception::vision::network::BUSY_MODEL;
+use cablecell::perception::vision::network::{BUSY_MODEL, DEFAULT_MODEL};
 use cablecell::sim::render::{Background, CableSpec, write_scene_files};
 use common::scenes::{draw_scene, matte_cable};
 use opencv::core::Vector;
@@ -62,12 +62,39 @@ fn detect_says_whether_the_background_is_plain_busy_or_painted() {
     ] {
         let cables = vec![cable([100.0, 100.0], [540.0, 380.0])];
         let path = write_scene_over(dir.path(), stem, background, cables, false);
-        let reports = json_of(&["detect", text(&path), "--busy-model", BUSY_MODEL, "--json"]);
+        let reports = json_of(&["detect", text(&path), "--json"]);
         let report = &reports["images"][0];
         assert_eq!(report["plain_background"], plain, "{stem}");
         assert_eq!(report["busy_background"], busy, "{stem}");
         assert_eq!(report["painted_background"], busy, "{stem}");
     }
+}
+
+/// Without `--model`, the shipped network for busy scenes sees a painted
+/// one; given `--model` alone, that network sees every scene.
+#[test]
+fn detect_sees_paint_with_the_busy_scenes_network_unless_given_one_model() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cables = vec![
+        cable([100.0, 100.0], [540.0, 380.0]),
+        cable([80.0, 400.0], [560.0, 60.0]),
+    ];
+    let path = write_scene_over(dir.path(), "paint", Background::Pollock, cables, false);
+    let cables_found = |options: &[&str]| {
+        let mut args = vec!["detect", text(&path), "--json"];
+        args.extend(options);
+        json_of(&args)["images"][0]["cables"].clone()
+    };
+    let by_default = cables_found(&[]);
+    assert_eq!(
+        by_default,
+        cables_found(&["--model", DEFAULT_MODEL, "--busy-model", BUSY_MODEL])
+    );
+    assert_ne!(
+        by_default,
+        cables_found(&["--model", DEFAULT_MODEL]),
+        "the two networks find the same cables: the test shows nothing"
+    );
 }
 
 #[test]

@@ -14,7 +14,7 @@ use cablecell::campaign::bench::{
     BenchSize, SettingRow, StageLatency, run_settings, settings, stage_latencies,
 };
 use cablecell::campaign::run::{Campaign, Overrides};
-use cablecell::perception::vision::network::{DEFAULT_MODEL, runtime_library};
+use cablecell::perception::vision::network::{BUSY_MODEL, DEFAULT_MODEL, runtime_library};
 use cablecell::plot::bench::{ParetoFigure, ParetoPanel, ParetoPoint};
 use cablecell::sim::render::BackgroundChoice;
 use schemars::JsonSchema;
@@ -173,7 +173,14 @@ fn vision_rows(
     let runtime = runtime_library(None);
     let mut rows = Vec::new();
     for (set, settings) in runs {
-        rows.extend(run_vision(set, settings, model, &runtime, || bar.inc(1))?);
+        rows.extend(run_vision(
+            set,
+            settings,
+            model,
+            Some(Path::new(BUSY_MODEL)),
+            &runtime,
+            || bar.inc(1),
+        )?);
     }
     bar.finish_and_clear();
     Ok(rows)

@@ -8,7 +8,7 @@ use cablecell::cell::{CellFile, load_cell_uncalibrated};
 use cablecell::detector::config::{DetectorBackend, VisionDetectorConfig};
 
 use cablecell::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
+    BUSY_MODEL, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
     MAX_INPUT_SCALE, runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
@@ -30,13 +30,15 @@ pub struct VisionArgs {
     /// How to split the mask into cables.
     #[arg(long, value_enum, default_value = "skeleton")]
     pub instances: InstancesArg,
-    /// The segmentation network.
-    #[arg(long, default_value = DEFAULT_MODEL)]
-    pub model: PathBuf,
-    /// A second network for the scenes whose background is busy (paint,
-    /// prints, mosaics), e.g. models/cable_segmentation_busy.onnx, which
-    /// counts more cables right there (docs/vision.md); without it --model
-    /// sees every scene.
+    /// The segmentation network [default: models/cable_segmentation.onnx,
+    /// with models/cable_segmentation_busy.onnx for painted scenes]; given
+    /// alone, it sees every scene.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// A second network for the scenes whose background is painted (busy
+    /// and of many colours: paint, prints, mosaics), which counts more
+    /// cables right there (docs/vision.md) [default: the shipped one where
+    /// --model is not given].
     #[arg(long)]
     pub busy_model: Option<PathBuf>,
     /// The ONNX Runtime library (default: $ORT_DYLIB_PATH, else the
@@ -173,16 +175,23 @@ impl VisionArgs {
         Pipeline::new(config)
     }
 
+    /// The network, with the one for painted scenes: the shipped pair
+    /// unless `--model` is given, which alone sees every scene unless
+    /// `--busy-model` is given too.
     pub fn network(&self) -> LazyNetwork {
-        LazyNetwork::new(
-            self.model.clone(),
-            runtime_library(self.onnxruntime.as_deref()),
-        )
-        .tuned(
-            self.threshold,
-            InputScales::new(self.net_scale, self.close_net_scale),
-        )
-        .with_busy_model(self.busy_model.clone())
+        let (model, busy_model) = match &self.model {
+            Some(model) => (model.clone(), self.busy_model.clone()),
+            None => (
+                PathBuf::from(DEFAULT_MODEL),
+                Some(self.busy_model.clone().unwrap_or(BUSY_MODEL.into())),
+            ),
+        };
+        LazyNetwork::new(model, runtime_library(self.onnxruntime.as_deref()))
+            .tuned(
+                self.threshold,
+                InputScales::new(self.net_scale, self.close_net_scale),
+            )
+            .with_busy_model(busy_model)
     }
 }
 

@@ -390,13 +390,15 @@ pub fn roi_around_cables(truth: &GroundTruth) -> Option<Rect> {
 }
 
 /// Runs each setting on every image of `set` and scores it against the
-/// labels. Each setting runs once on
-/// the first image untimed, so that loading the network and first-use
-/// allocations are not counted. `on_image` is called after each image.
+/// labels, with `busy_model` for the painted scenes where given. Each
+/// setting loads its networks and runs once on the first image untimed,
+/// so that loading them and first-use allocations are not counted.
+/// `on_image` is called after each image.
 pub fn run_vision(
     set: &ImageSet,
     settings: &[VisionSetting],
     model: &Path,
+    busy_model: Option<&Path>,
     runtime_library: &Path,
     mut on_image: impl FnMut(),
 ) -> Result<Vec<VisionRow>, VisionBenchError> {
@@ -405,6 +407,7 @@ pub fn run_vision(
         let mut network = setting.input_scales.map(|scales| {
             LazyNetwork::new(model.to_path_buf(), runtime_library.to_path_buf())
                 .tuned(DEFAULT_THRESHOLD, scales)
+                .with_busy_model(busy_model.map(Path::to_path_buf))
         });
         let mut scores = Vec::with_capacity(set.images.len());
         let mut total_ms = Vec::with_capacity(set.images.len());
@@ -425,6 +428,11 @@ pub fn run_vision(
                 image: labelled.name.clone(),
                 source: Box::new(source),
             };
+            if k == 0
+                && let Some(network) = network.as_mut()
+            {
+                network.load().map_err(failed)?;
+            }
             let mut detect = || {
                 let net = network.as_mut().map(|n| n as &mut dyn MaskNetwork);
                 pipeline.detect(&labelled.image, net).map_err(failed)
@@ -540,6 +548,7 @@ mod tests {
             &set,
             &skip_settings(),
             model,
+            None,
             &runtime_library(None),
             || images += 1,
         )

@@ -79,7 +79,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
             format!("{kind} network at {}×, skeleton ({file})", base.net_scale),
             with(&|a| {
                 a.mask = MaskArg::Network;
-                a.model = model.clone();
+                a.model = Some(model.clone());
                 a.instances = InstancesArg::Skeleton;
             }),
         ));
