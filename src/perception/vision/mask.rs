@@ -147,9 +147,9 @@ pub struct BackgroundStats {
     /// plain nor busy by its share near the median colour.
     pub edge_fraction: Option<f64>,
     /// Fraction of pixels whose hue alone lies farther than
-    /// [`PLAIN_NEAR_LAB`] from that colour's (see
-    /// [`PAINTED_MIN_OFF_HUE_FRACTION`]).
-    pub off_hue_fraction: f64,
+    /// [`PLAIN_NEAR_LAB`] from that colour's, measured only where the
+    /// background is busy (see [`PAINTED_MIN_OFF_HUE_FRACTION`]).
+    pub off_hue_fraction: Option<f64>,
     /// Whether the background counts as plain (`near_fraction >=
     /// PLAIN_MIN_FRACTION`).
     pub plain: bool,
@@ -176,7 +176,10 @@ impl BackgroundStats {
     /// mosaics, which a network for busy scenes sees
     /// ([`PAINTED_MIN_OFF_HUE_FRACTION`]); not a table's grain.
     pub fn painted(&self) -> bool {
-        self.busy() && self.off_hue_fraction >= PAINTED_MIN_OFF_HUE_FRACTION
+        self.busy()
+            && self
+                .off_hue_fraction
+                .is_some_and(|off_hue| off_hue >= PAINTED_MIN_OFF_HUE_FRACTION)
     }
 
     /// Whether the network should look closer at the image: its
@@ -320,13 +323,16 @@ pub fn background_stats(bgr: &Mat) -> Result<BackgroundStats, VisionError> {
         background_lab,
         near_fraction,
         edge_fraction: None,
-        off_hue_fraction: off_hue_fraction(bytes, background_lab),
+        off_hue_fraction: None,
         plain: near_fraction >= PLAIN_MIN_FRACTION,
         threshold_lab: 0.0,
         ambiguous_ratio: 0.0,
     };
     if !stats.plain && !stats.busy() {
         stats.edge_fraction = Some(edge_fraction(&lab)?);
+    }
+    if stats.busy() {
+        stats.off_hue_fraction = Some(off_hue_fraction(bytes, background_lab));
     }
     Ok(stats)
 }
@@ -339,7 +345,7 @@ fn off_hue_fraction(bytes: &[u8], background_lab: [f64; 3]) -> f64 {
         .filter(|px| {
             let da = f64::from(px[1]) - background_lab[1];
             let db = f64::from(px[2]) - background_lab[2];
-            da.hypot(db) > PLAIN_NEAR_LAB
+            da * da + db * db > PLAIN_NEAR_LAB * PLAIN_NEAR_LAB
         })
         .count();
     off_hue as f64 / (bytes.len() / 3).max(1) as f64

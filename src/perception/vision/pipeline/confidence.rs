@@ -286,7 +286,7 @@ mod tests {
             background_lab: [20.0, 128.0, 128.0],
             near_fraction,
             edge_fraction: None,
-            off_hue_fraction: 0.0,
+            off_hue_fraction: None,
             plain: false,
             threshold_lab: 0.0,
             ambiguous_ratio: 0.0,
