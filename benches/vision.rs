@@ -11,10 +11,10 @@ mod scenes;
 use std::hint::black_box;
 use std::path::PathBuf;
 
-use cablecell::perception::vision::mask;
 use cablecell::perception::vision::skeleton;
 use cablecell::perception::vision::spline::{BSpline, control_points_for_length};
 use cablecell::perception::vision::{GroundTruth, InstanceMethod, Pipeline, VisionConfig};
+use cablecell::perception::vision::{background, mask};
 use criterion::{Criterion, criterion_group, criterion_main};
 use opencv::imgcodecs;
 use opencv::prelude::*;
@@ -22,7 +22,7 @@ use scenes::demo_scene;
 
 fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) {
     let config = VisionConfig::default();
-    let background = mask::background_stats(image).expect("background statistics");
+    let background = background::background_stats(image).expect("background statistics");
     let (m, _) =
         mask::classical_mask(image, &background, config.min_blob_area_px).expect("classical mask");
     let instance_mask = truth_mask.unwrap_or(&m);
@@ -30,7 +30,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
         skeleton::paths_from_mask(instance_mask, None, config.min_cable_length_px).expect("paths");
     let mut group = c.benchmark_group(format!("vision/{name}"));
     group.bench_function("plain-background test", |b| {
-        b.iter(|| mask::background_stats(black_box(image)))
+        b.iter(|| background::background_stats(black_box(image)))
     });
     // Asked only for an image with a straight detection whose sides are
     // alike; off the cables' mask and a width around it.
@@ -39,7 +39,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     });
     group.bench_function("mask (classical)", |b| {
         b.iter(|| {
-            let background = mask::background_stats(black_box(image))?;
+            let background = background::background_stats(black_box(image))?;
             mask::classical_mask(image, &background, config.min_blob_area_px)
         })
     });

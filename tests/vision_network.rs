@@ -15,8 +15,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use cablecell::perception::vision::background::background_stats;
 use cablecell::perception::vision::eval::{self, GroundTruth};
-use cablecell::perception::vision::mask::background_stats;
 use cablecell::perception::vision::network::{
     BUSY_MODEL, DEFAULT_MODEL, FLOAT_MODEL, InputScales, LazyNetwork, MIRRORED_MODEL, NetworkError,
     SegmentationNet,

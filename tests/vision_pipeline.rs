@@ -10,7 +10,7 @@ use cablecell::perception::vision::curves::{arc_px, segment_px};
 use cablecell::perception::vision::eval::distance_to_polylines;
 use cablecell::perception::vision::{
     BackgroundStats, InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError,
-    VisionOutput, mask,
+    VisionOutput, background, mask,
 };
 use cablecell::sim::render::{Background, CableSpec, RenderedScene};
 use common::scenes::{demo_scene, draw_scene, matte_cable, midpoint_px};
@@ -1029,15 +1029,15 @@ fn the_network_looks_closer_at_a_mosaic_and_dark_cloth_and_not_at_wood() {
     assert!(mosaic.0.busy(), "{seen:?}");
     assert!(!dark.0.busy() && !wood.0.busy(), "{seen:?}");
     assert!(
-        wood.0.near_fraction >= mask::CLOSE_MAX_NEAR_FRACTION,
+        wood.0.near_fraction >= background::CLOSE_MAX_NEAR_FRACTION,
         "{seen:?}"
     );
     assert!(
-        dark.0.background_lab[0] < mask::DARK_MAX_LIGHTNESS,
+        dark.0.background_lab[0] < background::DARK_MAX_LIGHTNESS,
         "{seen:?}"
     );
     assert!(
-        wood.0.background_lab[0] >= mask::DARK_MAX_LIGHTNESS,
+        wood.0.background_lab[0] >= background::DARK_MAX_LIGHTNESS,
         "{seen:?}"
     );
     assert_eq!(
@@ -1059,7 +1059,7 @@ fn a_gray_table_under_a_light_that_falls_off_is_looked_at_closer_but_not_taken_f
     );
     let near = out.background.near_fraction;
     assert!(
-        (mask::BUSY_MAX_NEAR_FRACTION..mask::CLOSE_MAX_NEAR_FRACTION).contains(&near),
+        (background::BUSY_MAX_NEAR_FRACTION..background::CLOSE_MAX_NEAR_FRACTION).contains(&near),
         "{:?}",
         out.background
     );
@@ -1080,9 +1080,9 @@ fn a_straight_cable_on_a_busy_background_is_kept_and_on_wood_dropped_as_an_edge(
     // Paint and prints are busy: a straight line there is as likely a
     // cable as an edge. Wood is not: its straight lines are a table's
     // or a sheet's edges.
-    assert!(kept[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
+    assert!(kept[0].0 < background::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
     assert!(kept[0].1 && kept[0].2.is_empty(), "{kept:?}");
-    assert!(kept[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
+    assert!(kept[1].0 >= background::BUSY_MAX_NEAR_FRACTION, "{kept:?}");
     assert!(!kept[1].1, "{kept:?}");
     assert!(
         kept[1].2.iter().any(|n| n.contains("1 straight detection")),
@@ -1100,9 +1100,12 @@ fn a_short_piece_on_a_busy_background_is_dropped_as_paint_and_on_wood_kept() {
         let (out, _) = by_known_network(background, &piece, VisionConfig::default());
         found.push((out.background.near_fraction, out.cables.len()));
     }
-    assert!(found[0].0 < mask::BUSY_MAX_NEAR_FRACTION, "{found:?}");
+    assert!(found[0].0 < background::BUSY_MAX_NEAR_FRACTION, "{found:?}");
     assert_eq!(found[0].1, 0, "{found:?}");
-    assert!(found[1].0 >= mask::BUSY_MAX_NEAR_FRACTION, "{found:?}");
+    assert!(
+        found[1].0 >= background::BUSY_MAX_NEAR_FRACTION,
+        "{found:?}"
+    );
     assert_eq!(found[1].1, 1, "{found:?}");
     // The limit is a multiple of the configured one: 0 keeps everything.
     let keep_all = VisionConfig {

@@ -3,6 +3,7 @@
 //! segmentation network), one instance per cable, a B-spline along each,
 //! and the grasp frame at its middle.
 
+pub mod background;
 pub mod calibration;
 pub mod curves;
 pub mod error;
@@ -16,9 +17,9 @@ pub mod skeleton;
 pub mod spline;
 pub mod superpixels;
 
+pub use background::BackgroundStats;
 pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};
-pub use mask::BackgroundStats;
 pub use pipeline::{
     CableInstance, DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork,
     Pipeline, VisionConfig, VisionOutput, VisionSkip, union_mask,

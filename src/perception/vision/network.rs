@@ -49,7 +49,7 @@ pub const DEFAULT_CLOSE_INPUT_SCALE: f64 = 0.5;
 
 /// The network's input scales: `normal`, and `close` for an image whose
 /// background is far from one colour (paint, prints) or dark
-/// ([`crate::perception::vision::mask::BackgroundStats::closer_look`]). There the
+/// ([`crate::perception::vision::background::BackgroundStats::closer_look`]). There the
 /// network tells a cable from paint strokes of its colour, and a tube from
 /// dark cloth, better when it looks closer; on the photographs' bright
 /// cloth, wood and paper the smaller scale is faster and counts as many

@@ -14,8 +14,9 @@ use opencv::prelude::*;
 use super::config::MaskMethod;
 #[cfg(doc)]
 use super::config::VisionConfig;
+use crate::perception::vision::background::BackgroundStats;
 use crate::perception::vision::error::VisionError;
-use crate::perception::vision::mask::{self, BackgroundStats};
+use crate::perception::vision::mask;
 use crate::perception::vision::paths::median;
 
 /// Lengths, in widths, from which a detection is long enough to be a

@@ -7,7 +7,8 @@ use schemars::JsonSchema;
 use crate::perception::vision::superpixels;
 #[cfg(doc)]
 use {
-    super::MAX_ENLARGEMENT, super::straight_edge::EDGE_SIDES_RATIO, crate::perception::vision::mask,
+    super::MAX_ENLARGEMENT, super::straight_edge::EDGE_SIDES_RATIO,
+    crate::perception::vision::background, crate::perception::vision::mask,
 };
 
 /// How the cables' mask is made.
@@ -57,7 +58,7 @@ pub struct VisionConfig {
     /// it saves time and keeps clutter outside it from becoming cables.
     pub roi_px: Option<Rect>,
     /// Paths shorter than this are dropped: scraps of mask, not cables. On
-    /// a busy background (see [`mask::BackgroundStats::busy`]) the limit
+    /// a busy background (see [`background::BackgroundStats::busy`]) the limit
     /// is [`BUSY_MIN_LENGTH_FACTOR`] times this: scraps and splashes of
     /// paint that the network marks come longer.
     pub min_cable_length_px: f64,
@@ -80,7 +81,7 @@ pub struct VisionConfig {
     /// [`mask::plain_locally`]), such a path is kept when the background is
     /// alike on its two sides (see [`EDGE_SIDES_RATIO`]): an edge has two
     /// different sides. On a busy background (paint, prints, mosaics; see
-    /// [`mask::BackgroundStats::busy`]) every path is kept: the edges this
+    /// [`background::BackgroundStats::busy`]) every path is kept: the edges this
     /// is for lie on tables, and it dropped the straight cables on paint.
     /// 0 keeps every path: for a cell whose cable is held taut.
     pub straight_edge_radius_px: f64,

@@ -9,8 +9,9 @@ use opencv::prelude::*;
 use super::confidence::Belief;
 use super::config::MaskMethod;
 use super::work_area::NetworkView;
+use crate::perception::vision::background::{self, BackgroundStats};
 use crate::perception::vision::error::{VisionError, cv};
-use crate::perception::vision::mask::{self, BackgroundStats};
+use crate::perception::vision::mask;
 
 /// A segmentation network that gives the cables' mask; implemented by the
 /// ONNX network so that the pipeline does not depend on its runtime.
@@ -62,7 +63,7 @@ pub(super) fn choose_mask(
     min_blob_area_px: f64,
     notes: &mut Vec<String>,
 ) -> Result<MaskChoice, VisionError> {
-    let background = mask::background_stats(work)?;
+    let background = background::background_stats(work)?;
     let network_mask =
         |net: &mut dyn MaskNetwork| network_mask(net, work, view, &background, min_blob_area_px);
     let (found, used, background) = match (method, network) {
@@ -77,7 +78,7 @@ pub(super) fn choose_mask(
                 notes.push(format!(
                     "background not plain ({:.0}% of pixels near its colour, plain needs {:.0}%) and no network given: used the classical mask, expect clutter in it",
                     100.0 * background.near_fraction,
-                    100.0 * mask::PLAIN_MIN_FRACTION
+                    100.0 * background::PLAIN_MIN_FRACTION
                 ));
             }
             let (m, stats) = mask::classical_mask(work, &background, min_blob_area_px)?;

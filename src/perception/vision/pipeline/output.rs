@@ -7,7 +7,7 @@ use opencv::core::Mat;
 use schemars::JsonSchema;
 
 use super::config::MaskMethod;
-use crate::perception::vision::mask::BackgroundStats;
+use crate::perception::vision::background::BackgroundStats;
 use crate::perception::vision::spline::BSpline;
 #[cfg(doc)]
 use {super::config::VisionConfig, crate::perception::vision::mask};
@@ -66,7 +66,7 @@ pub struct VisionOutput {
     /// The mask method actually run: `Classical` or `Network`.
     pub mask_used: MaskMethod,
     /// Whether the background was judged plain (see
-    /// [`mask::PLAIN_MIN_FRACTION`]).
+    /// [`crate::perception::vision::background::PLAIN_MIN_FRACTION`]).
     pub plain_background: bool,
     /// The background statistics behind that judgement.
     pub background: BackgroundStats,
