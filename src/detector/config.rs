@@ -80,9 +80,9 @@ pub struct VisionDetectorConfig {
     pub instances: InstanceMethod,
     /// The segmentation network, relative to the cell file.
     pub model: PathBuf,
-    /// A second network for the scenes whose background is busy (paint,
-    /// prints, mosaics), relative to the cell file; without it `model`
-    /// sees every scene.
+    /// A second network for the scenes whose background is painted (busy
+    /// and of many colours: paint, prints, mosaics), relative to the cell
+    /// file; without it `model` sees every scene.
     #[serde(default)]
     pub busy_model: Option<PathBuf>,
     /// The ONNX Runtime library, relative to the cell file (default:

@@ -21,8 +21,8 @@ pub trait MaskNetwork {
     /// probabilities. Probabilities also tell each detection's confidence
     /// how sure the network was of it. `background`: the image's
     /// background, where a network may look closer
-    /// ([`BackgroundStats::closer_look`]) or hand a busy scene to a network
-    /// of its own ([`BackgroundStats::busy`]).
+    /// ([`BackgroundStats::closer_look`]) or hand a painted scene to a
+    /// network of its own ([`BackgroundStats::painted`]).
     fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError>;
 
     /// The probability above which a pixel is cable, for a network that

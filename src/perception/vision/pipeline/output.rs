@@ -10,7 +10,7 @@ use super::config::MaskMethod;
 use crate::perception::vision::background::BackgroundStats;
 use crate::perception::vision::spline::BSpline;
 #[cfg(doc)]
-use {super::config::VisionConfig, crate::perception::vision::mask};
+use {super::config::VisionConfig, crate::perception::vision::background};
 
 /// One cable found in the image, in full-image pixel coordinates (x right,
 /// y down), whatever the region of interest.
@@ -66,7 +66,7 @@ pub struct VisionOutput {
     /// The mask method actually run: `Classical` or `Network`.
     pub mask_used: MaskMethod,
     /// Whether the background was judged plain (see
-    /// [`crate::perception::vision::background::PLAIN_MIN_FRACTION`]).
+    /// [`background::PLAIN_MIN_FRACTION`]).
     pub plain_background: bool,
     /// The background statistics behind that judgement.
     pub background: BackgroundStats,
