@@ -279,35 +279,13 @@ def made_pale(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> np
     return np.clip(pale, 0, 255).astype(np.uint8)
 
 
-def bent(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A cut-out cable bent along a smooth random field, its texture, sheen
-    and ends kept: a shape no photograph holds. The training photographs
-    hold some 200 cables, and more backgrounds under them stopped teaching
-    the network (models/README.md, "The network for busy scenes"). The
-    field's control points lie 40-80 px apart (fewer on a short cable) and
-    move by 5-18 % of that (standard deviation), so the cable bends while
-    its width changes little."""
-    h, w = pm.shape
-    grid = int(np.clip(max(h, w) // rng.uniform(40, 80), 2, 5)) + 1
-    amplitude = min(16.0, rng.uniform(0.05, 0.18) * max(h, w) / (grid - 1))
-    pad = int(np.ceil(2.5 * amplitude))
-    patch = cv2.copyMakeBorder(patch, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
-    pm = cv2.copyMakeBorder(pm, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=0)
-    h, w = pm.shape
-    dx, dy = (cv2.resize(rng.normal(0, amplitude, (grid, grid)).astype(np.float32), (w, h),
-                         interpolation=cv2.INTER_CUBIC) for _ in range(2))
-    xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
-    return (cv2.remap(patch, xs + dx, ys + dy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT),
-            cv2.remap(pm, xs + dx, ys + dy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT))
-
-
 def paste_cables(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray,
                  cutouts: list[tuple[np.ndarray, np.ndarray]],
-                 pale_fraction: float = 0.0, bend_fraction: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                 pale_fraction: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """`img` with one to four real cables pasted over it, each scaled (the
     paper's cables are up to 2.5 times as thick as cables-dev's), rotated,
-    shaded and blurred like the scene (`pale_fraction` of them made pale,
-    `bend_fraction` bent), its mask added to the labels."""
+    shaded and blurred like the scene (`pale_fraction` of them made pale),
+    its mask added to the labels."""
     h, w = mask.shape
     img = img.astype(np.float32)
     mask = mask.copy()
@@ -315,8 +293,6 @@ def paste_cables(rng: np.random.Generator, img: np.ndarray, mask: np.ndarray,
         patch, pm = cutouts[rng.integers(0, len(cutouts))]
         if pale_fraction > 0 and rng.random() < pale_fraction:
             patch = made_pale(rng, patch, pm)
-        if bend_fraction > 0 and rng.random() < bend_fraction:
-            patch, pm = bent(rng, patch, pm)
         s = rng.uniform(1.0, 2.6)
         a = rng.uniform(-180, 180)
         ph, pw = pm.shape
@@ -479,7 +455,7 @@ def make_batch(rng, real, synth, busy, cutouts, args, model):
             j = rng.integers(0, len(source[0]))
             img, m = source[0][j], source[1][j]
             if source is busy and cutouts and rng.random() < args.paste_fraction:
-                img, m = paste_cables(rng, img, m, cutouts, args.pale_fraction, args.bend_fraction)
+                img, m = paste_cables(rng, img, m, cutouts, args.pale_fraction)
             if source is synth and args.recolour_fraction > 0 and rng.random() < args.recolour_fraction:
                 img = recolour_background(rng, img, m)
             candidates.append(augment(rng, img, m, args.crop, tuple(args.scales)))
@@ -782,9 +758,6 @@ def main() -> int:
     parser.add_argument("--pale-fraction", type=float, default=0.0,
                         help="share of pasted cables made white or pale grey (made_pale; models/README.md, "
                              "\"Pale cables\")")
-    parser.add_argument("--bend-fraction", type=float, default=0.0,
-                        help="share of pasted cables bent along a smooth random field (bent; models/README.md, "
-                             "\"The network for busy scenes\")")
     parser.add_argument("--checkpoint-every", type=int, default=200,
                         help="steps between checkpoints (OUT_STEM.checkpoint.pt beside the model)")
     parser.add_argument("--init", type=Path,
