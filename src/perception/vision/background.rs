@@ -109,8 +109,9 @@ pub struct BackgroundStats {
 }
 
 impl BackgroundStats {
-    /// Whether the background is busy: paint, prints, mosaics (see
-    /// [`BUSY_MAX_NEAR_FRACTION`] and [`BUSY_MIN_EDGE_FRACTION`]).
+    /// Whether the background is busy: paint, prints, mosaics, or a
+    /// wooden table's grain of one hue (see [`BUSY_MAX_NEAR_FRACTION`],
+    /// [`BUSY_MIN_EDGE_FRACTION`] and [`BackgroundStats::painted`]).
     pub fn busy(&self) -> bool {
         self.near_fraction < BUSY_MAX_NEAR_FRACTION
             || self
