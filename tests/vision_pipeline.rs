@@ -9,8 +9,8 @@ mod common;
 use cablecell::perception::vision::curves::{arc_px, segment_px};
 use cablecell::perception::vision::eval::distance_to_polylines;
 use cablecell::perception::vision::{
-    BackgroundStats, InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError,
-    VisionOutput, background, mask,
+    BackgroundStats, InstanceMethod, MaskMethod, MaskNetwork, PAINTED_MIN_CONFIDENCE_FACTOR,
+    Pipeline, VisionConfig, VisionError, VisionOutput, background, mask,
 };
 use cablecell::sim::render::{Background, CableSpec, RenderedScene};
 use common::scenes::{demo_scene, draw_scene, matte_cable, midpoint_px};
@@ -1114,6 +1114,43 @@ fn a_short_piece_on_a_busy_background_is_dropped_as_paint_and_on_wood_kept() {
     };
     let (out, _) = by_known_network(Background::Mosaic, &piece, keep_all);
     assert_eq!(out.cables.len(), 1);
+}
+
+#[test]
+fn on_paint_a_detection_must_be_more_confident_than_on_wood() {
+    let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+    for (background, painted) in [(Background::Pollock, true), (Background::Wood, false)] {
+        let with_floor = |min_confidence: f64| {
+            let config = VisionConfig {
+                min_confidence,
+                ..keep_straight()
+            };
+            by_known_network(background.clone(), &curve, config).0
+        };
+        let all = with_floor(0.0);
+        assert_eq!(all.background.painted(), painted, "{:?}", all.background);
+        let [found] = &all.cables[..] else {
+            panic!("{background:?}: {:?}", all.cables)
+        };
+        // A floor just under the cable's confidence, which the painted
+        // background's factor lifts over it.
+        let floor = found.confidence / (1.0 + (PAINTED_MIN_CONFIDENCE_FACTOR - 1.0) / 2.0);
+        let out = with_floor(floor);
+        if painted {
+            assert!(out.cables.is_empty(), "{:?}", out.cables);
+            let raised = format!(
+                "less confident than {:.3} (the floor times {PAINTED_MIN_CONFIDENCE_FACTOR} on a painted background)",
+                PAINTED_MIN_CONFIDENCE_FACTOR * floor
+            );
+            assert!(
+                out.notes.iter().any(|n| n.contains(&raised)),
+                "{raised}: {:?}",
+                out.notes
+            );
+        } else {
+            assert_eq!(out.cables.len(), 1, "{:?}", out.notes);
+        }
+    }
 }
 
 #[test]

@@ -123,8 +123,9 @@ pub struct VisionDetectorConfig {
     /// Detections less confident than this, 0 to 1, are dropped as
     /// probably not cables (default
     /// [`crate::perception::vision::DEFAULT_MIN_CONFIDENCE`]); 0 keeps
-    /// them all. A cell that holds its one cable in a fixture may trust a
-    /// fainter detection than a busy scene can.
+    /// them all; a tenth higher on a painted background. A cell that holds
+    /// its one cable in a fixture may trust a fainter detection than a
+    /// busy scene can.
     #[serde(default = "default_min_confidence", deserialize_with = "fraction")]
     pub min_confidence: f64,
     /// The plane the cable lies in, known from the fixture (the paper's

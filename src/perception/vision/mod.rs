@@ -22,6 +22,6 @@ pub use error::VisionError;
 pub use eval::{GroundTruth, ImageScore, ScoreSummary, score, score_cables, summarize};
 pub use pipeline::{
     CableInstance, DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskInstances, MaskMethod, MaskNetwork,
-    Pipeline, VisionConfig, VisionOutput, VisionSkip, union_mask,
+    PAINTED_MIN_CONFIDENCE_FACTOR, Pipeline, VisionConfig, VisionOutput, VisionSkip, union_mask,
 };
 pub use spline::BSpline;

@@ -101,12 +101,20 @@ pub struct VisionConfig {
     pub cable_masks: bool,
     /// Detections less confident than this (see `confidence.rs`) are
     /// dropped as probably not cables: splashes of paint, brushed strokes, flat paint.
+    /// On a painted background (see [`background::BackgroundStats::painted`])
+    /// the floor is [`PAINTED_MIN_CONFIDENCE_FACTOR`] times this.
     pub min_confidence: f64,
 }
 
 /// The confidence below which a detection is dropped, unless a cell or
 /// the command line says otherwise (docs/vision.md, "Confidence").
 pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.45;
+
+/// How many times [`VisionConfig::min_confidence`] a detection must be on
+/// a painted background (paint, prints, mosaics of many colours), where
+/// more of what the network marks is paint (docs/vision-record.md, "A
+/// higher floor on paint").
+pub const PAINTED_MIN_CONFIDENCE_FACTOR: f64 = 1.1;
 
 /// How many times [`VisionConfig::min_cable_length_px`] a path must be on
 /// a busy background, where the network marks scraps and splashes of

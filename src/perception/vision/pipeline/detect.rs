@@ -11,7 +11,9 @@ use opencv::imgproc;
 use opencv::prelude::*;
 
 use super::confidence::{self, Belief};
-use super::config::{BUSY_MIN_LENGTH_FACTOR, InstanceMethod, MaskMethod};
+use super::config::{
+    BUSY_MIN_LENGTH_FACTOR, InstanceMethod, MaskMethod, PAINTED_MIN_CONFIDENCE_FACTOR,
+};
 use super::draw::{mask_in_image, path_mask, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
 use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
@@ -34,6 +36,10 @@ struct LookAlikes {
     /// table edges as straight as a taut cable (see
     /// [`VisionConfig::straight_edge_radius_px`]).
     busy: bool,
+    /// A painted background (busy and of many colours): more of what the
+    /// network marks there is paint, so a detection must be more
+    /// confident (see [`VisionConfig::min_confidence`]).
+    painted: bool,
 }
 
 impl LookAlikes {
@@ -41,6 +47,16 @@ impl LookAlikes {
     /// busy background's scraps.
     fn only_cables(self) -> bool {
         !self.strokes && !self.busy
+    }
+
+    /// The confidence below which a detection is dropped, given the
+    /// configured floor.
+    fn min_confidence(self, configured: f64) -> f64 {
+        if self.painted {
+            PAINTED_MIN_CONFIDENCE_FACTOR * configured
+        } else {
+            configured
+        }
     }
 }
 
@@ -91,6 +107,7 @@ impl Pipeline {
         let look_alikes = LookAlikes {
             strokes: confidence::strokes_possible(mask_used, &background),
             busy: background.busy(),
+            painted: background.painted(),
         };
         let found = self.cables_in(&work, &mask_roi, look_alikes, belief.as_ref(), roi, full)?;
         timings_ms.extend(found.timings_ms);
@@ -102,8 +119,14 @@ impl Pipeline {
         }
         if found.unconfident_dropped > 0 {
             notes.push(format!(
-                "dropped {} detection(s) less confident than {:.2} as probably not cables: short against their width, unevenly wide, unlike the other cables' width, or flat as paint",
-                found.unconfident_dropped, self.config.min_confidence
+                "dropped {} detection(s) less confident than {:.3}{} as probably not cables: short against their width, unevenly wide, unlike the other cables' width, or flat as paint",
+                found.unconfident_dropped,
+                look_alikes.min_confidence(self.config.min_confidence),
+                if look_alikes.painted {
+                    format!(" (the floor times {PAINTED_MIN_CONFIDENCE_FACTOR} on a painted background)")
+                } else {
+                    String::new()
+                }
             ));
         }
         if found.border_dropped > 0 {
@@ -197,6 +220,7 @@ impl Pipeline {
         let look_alikes = LookAlikes {
             strokes: false,
             busy: false,
+            painted: false,
         };
         self.cables_in(&image, mask, look_alikes, None, full, full)
     }
@@ -271,6 +295,7 @@ impl Pipeline {
         let mut fitted = Vec::new();
         let mut straight_dropped = 0;
         let mut unconfident_dropped = 0;
+        let min_confidence = look_alikes.min_confidence(self.config.min_confidence);
         let mut plain_around = None;
         let half_widths = mask::half_widths(mask_roi)?;
         // Paint dries flat; where it may pass for cable, how shaded each
@@ -295,7 +320,7 @@ impl Pipeline {
                 look_alikes.strokes.then_some(found.width_px),
                 lightness_spread,
             );
-            if confidence < self.config.min_confidence {
+            if confidence < min_confidence {
                 unconfident_dropped += 1;
                 continue;
             }

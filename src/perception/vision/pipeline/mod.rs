@@ -25,7 +25,9 @@ mod work_area;
 
 use std::time::Instant;
 
-pub use config::{DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, VisionConfig};
+pub use config::{
+    DEFAULT_MIN_CONFIDENCE, InstanceMethod, MaskMethod, PAINTED_MIN_CONFIDENCE_FACTOR, VisionConfig,
+};
 pub(crate) use draw::draw_paths;
 pub use draw::union_mask;
 pub use mask_choice::MaskNetwork;
