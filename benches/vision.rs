@@ -11,6 +11,7 @@ mod scenes;
 use std::hint::black_box;
 use std::path::PathBuf;
 
+use cablecell::perception::vision::paths::JOIN_GAP_WIDTHS;
 use cablecell::perception::vision::skeleton;
 use cablecell::perception::vision::spline::{BSpline, control_points_for_length};
 use cablecell::perception::vision::{GroundTruth, InstanceMethod, Pipeline, VisionConfig};
@@ -26,8 +27,13 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     let (m, _) =
         mask::classical_mask(image, &background, config.min_blob_area_px).expect("classical mask");
     let instance_mask = truth_mask.unwrap_or(&m);
-    let found =
-        skeleton::paths_from_mask(instance_mask, None, config.min_cable_length_px).expect("paths");
+    let found = skeleton::paths_from_mask(
+        instance_mask,
+        None,
+        config.min_cable_length_px,
+        JOIN_GAP_WIDTHS,
+    )
+    .expect("paths");
     let mut group = c.benchmark_group(format!("vision/{name}"));
     group.bench_function("plain-background test", |b| {
         b.iter(|| background::background_stats(black_box(image)))
@@ -45,7 +51,12 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     });
     group.bench_function("instances (skeleton)", |b| {
         b.iter(|| {
-            skeleton::paths_from_mask(black_box(instance_mask), None, config.min_cable_length_px)
+            skeleton::paths_from_mask(
+                black_box(instance_mask),
+                None,
+                config.min_cable_length_px,
+                JOIN_GAP_WIDTHS,
+            )
         })
     });
     // As the pipeline runs it: crossings also pair branches by colour.
@@ -55,6 +66,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
                 black_box(instance_mask),
                 Some(image),
                 config.min_cable_length_px,
+                JOIN_GAP_WIDTHS,
             )
         })
     });

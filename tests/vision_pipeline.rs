@@ -1154,6 +1154,62 @@ fn on_paint_a_detection_must_be_more_confident_than_on_wood() {
 }
 
 #[test]
+fn on_paint_a_cable_is_joined_across_a_longer_gap_in_its_mask() {
+    // Two straight runs that meet at a bend of 0.35 rad, too sharp for
+    // the long gap's rule. The network's mask loses the cable for 36 px
+    // around the bend: the skeleton's ends lie about 44 px apart, over
+    // the short gap on wood (four widths and 4 px) and within it on paint.
+    let bend_px = [320.0, 260.0];
+    let onward_px = [
+        bend_px[0] + 220.0 * 0.35_f64.cos(),
+        bend_px[1] - 220.0 * 0.35_f64.sin(),
+    ];
+    let mut curve = segment_px([90.0, 260.0], bend_px);
+    curve.extend(segment_px(bend_px, onward_px).into_iter().skip(1));
+    let keep_all = VisionConfig {
+        min_confidence: 0.0,
+        ..keep_straight()
+    };
+    for (background, pieces) in [(Background::Pollock, 1), (Background::Wood, 2)] {
+        let scene = draw_scene(
+            480,
+            640,
+            background.clone(),
+            0.0,
+            vec![cable(curve.clone(), [40, 40, 220])],
+            7,
+        )
+        .unwrap();
+        let mut mask = scene.union_mask.clone();
+        let centre = Point::new(bend_px[0] as i32, bend_px[1] as i32);
+        imgproc::circle(
+            &mut mask,
+            centre,
+            18,
+            Scalar::all(0.0),
+            -1,
+            imgproc::LINE_8,
+            0,
+        )
+        .unwrap();
+        let config = VisionConfig {
+            mask: MaskMethod::Network,
+            ..keep_all.clone()
+        };
+        let out = Pipeline::new(config)
+            .detect(&scene.bgr, Some(&mut KnownMask::new(mask)))
+            .unwrap();
+        assert_eq!(
+            out.background.painted(),
+            pieces == 1,
+            "{:?}",
+            out.background
+        );
+        assert_eq!(out.cables.len(), pieces, "{background:?}: {:?}", out.notes);
+    }
+}
+
+#[test]
 fn paint_as_flat_as_a_stroke_is_dropped_and_a_shaded_cable_kept() {
     // On Pollock-like paint the network (a stand-in) marks a rendered
     // cable and, below it, a stroke of one flat green as long and as wide.

@@ -4,6 +4,7 @@
 //! well formed: paths at least the minimum length, inside the image, on
 //! the mask; grasp frames finite and on their cable.
 
+use cablecell::perception::vision::paths::JOIN_GAP_WIDTHS;
 use cablecell::perception::vision::{
     InstanceMethod, MaskMethod, Pipeline, VisionConfig, skeleton, superpixels,
 };
@@ -163,14 +164,16 @@ fn a_mask_that_fills_its_image_or_a_thin_strip_gives_no_cable() {
         let mut image = Mat::default();
         imgproc::cvt_color_def(&mask, &mut image, imgproc::COLOR_GRAY2BGR).unwrap();
         let by_superpixels =
-            superpixels::paths_from_mask(&image, &mask, MIN_LENGTH_PX, 2.0).unwrap();
+            superpixels::paths_from_mask(&image, &mask, MIN_LENGTH_PX, 2.0, JOIN_GAP_WIDTHS)
+                .unwrap();
         assert!(by_superpixels.paths.is_empty(), "{rows}x{cols}");
         assert!(
             by_superpixels.width_px <= f64::from(rows.min(cols)) + 1.0,
             "{rows}x{cols}: {}",
             by_superpixels.width_px
         );
-        let by_skeleton = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX).unwrap();
+        let by_skeleton =
+            skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
         assert!(by_skeleton.paths.len() <= 1, "{rows}x{cols}");
     }
 }
@@ -181,7 +184,7 @@ proptest! {
     #[test]
     fn skeleton_paths_are_well_formed_on_any_mask(recipe in any_mask()) {
         let mask = recipe.draw();
-        let found = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX).unwrap();
+        let found = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
         prop_assert!(found.width_px.is_finite() && found.width_px >= 0.0);
         for path in &found.paths {
             prop_assert!(path.length_px >= MIN_LENGTH_PX, "{}", path.length_px);
@@ -205,7 +208,7 @@ proptest! {
         let mask = recipe.draw();
         let mut image = Mat::default();
         imgproc::cvt_color_def(&mask, &mut image, imgproc::COLOR_GRAY2BGR).unwrap();
-        let found = superpixels::paths_from_mask(&image, &mask, MIN_LENGTH_PX, 2.0).unwrap();
+        let found = superpixels::paths_from_mask(&image, &mask, MIN_LENGTH_PX, 2.0, JOIN_GAP_WIDTHS).unwrap();
         for path in &found.paths {
             prop_assert!(path.length_px >= MIN_LENGTH_PX);
             for &p in &path.points_px {

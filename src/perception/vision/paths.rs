@@ -15,8 +15,14 @@ use super::spline::arc_lengths_px;
 /// [`JOIN_GAP_EXTRA_PX`]) apart, and continue each other, are one cable
 /// broken by a gap in the mask: at a ferrule, a glint, a shadow, or where
 /// a crossing was resolved wrongly.
-const JOIN_GAP_WIDTHS: f64 = 4.0;
-const JOIN_GAP_EXTRA_PX: f64 = 4.0;
+pub const JOIN_GAP_WIDTHS: f64 = 4.0;
+/// The same on a painted background, where the mask loses a cable for
+/// longer stretches: paint of the cable's own colour runs across it, and
+/// the network for busy scenes cuts it there.
+pub const PAINTED_JOIN_GAP_WIDTHS: f64 = 6.0;
+/// Added to the short gap so that thin cables' masks, broken for a few
+/// pixels, still join.
+pub const JOIN_GAP_EXTRA_PX: f64 = 4.0;
 /// Paths continue each other when neither end, nor the step between them,
 /// turns by more than this.
 const JOIN_MAX_BEND_RAD: f64 = 0.45;
@@ -142,18 +148,20 @@ pub(super) fn tangent_span_px(width_px: f64) -> f64 {
     (JOIN_TANGENT_WIDTHS * width_px).max(JOIN_TANGENT_MIN_PX)
 }
 
-/// Joins paths that continue each other across a short gap (see
-/// [`JOIN_GAP_WIDTHS`]) or a longer one (see [`LONG_GAP_WIDTHS`]), or bend
-/// under another cable (see [`JOIN_UNDER_MAX_BEND_RAD`]), by shape alone
-/// without the BGR `image`, best-aligned pair first, until no pair does.
+/// Joins paths that continue each other across a short gap of up to
+/// `join_gap_widths` cable widths (see [`JOIN_GAP_WIDTHS`]) or a longer
+/// one (see [`LONG_GAP_WIDTHS`]), or bend under another cable (see
+/// [`JOIN_UNDER_MAX_BEND_RAD`]), by shape alone without the BGR `image`,
+/// best-aligned pair first, until no pair does.
 /// Each path's ends are looked at in both directions, so the result may
 /// run either way.
 pub fn join_continuations(
     mut paths: Vec<Vec<[f64; 2]>>,
     image: Option<&Mat>,
     width_px: f64,
+    join_gap_widths: f64,
 ) -> Result<Vec<Vec<[f64; 2]>>, VisionError> {
-    let max_gap_px = JOIN_GAP_WIDTHS * width_px + JOIN_GAP_EXTRA_PX;
+    let max_gap_px = join_gap_widths * width_px + JOIN_GAP_EXTRA_PX;
     let long_gap_px = LONG_GAP_WIDTHS * width_px;
     let reach_px = max_gap_px.max(long_gap_px);
     let span_px = tangent_span_px(width_px);
@@ -412,15 +420,17 @@ fn cut_at_border(
 /// The cables from pixel paths in `mask`, whichever method found them:
 /// paths cut where they run along the mask's border (see
 /// [`BORDER_CUT_WIDTHS`]), pieces that continue each other joined (see
-/// [`join_continuations`], given the BGR `image` the mask was found in,
-/// if any), each run from its end with the smaller (x, y) and kept if at
-/// least `min_length_px` long, sorted by their first point.
+/// [`join_continuations`] across up to `join_gap_widths`, given the BGR
+/// `image` the mask was found in, if any), each run from its end with the
+/// smaller (x, y) and kept if at least `min_length_px` long, sorted by
+/// their first point.
 pub(super) fn finish_paths(
     paths: Vec<Vec<[f64; 2]>>,
     mask: &Mat,
     image: Option<&Mat>,
     width_px: f64,
     min_length_px: f64,
+    join_gap_widths: f64,
 ) -> Result<FoundPaths, VisionError> {
     let size_px = [f64::from(mask.cols()), f64::from(mask.rows())];
     let margin_px = BORDER_CUT_WIDTHS * width_px + BORDER_CUT_EXTRA_PX;
@@ -429,7 +439,7 @@ pub(super) fn finish_paths(
         .into_iter()
         .flat_map(|path| cut_at_border(path, size_px, margin_px, span_px))
         .collect();
-    let paths = join_continuations(paths, image, width_px)?;
+    let paths = join_continuations(paths, image, width_px, join_gap_widths)?;
 
     let mut out: Vec<CablePath> = paths
         .into_iter()
@@ -471,7 +481,7 @@ mod tests {
             segment_px([200.0, 100.0], [120.0, 100.0]),
             segment_px([0.0, 100.0], [100.0, 100.0]),
         ];
-        let joined = join_continuations(pieces, None, 8.0).unwrap();
+        let joined = join_continuations(pieces, None, 8.0, JOIN_GAP_WIDTHS).unwrap();
         assert_eq!(joined.len(), 1);
         let path = &joined[0];
         assert_eq!(path.len(), 101 + 81);
@@ -486,20 +496,35 @@ mod tests {
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([110.0, 110.0], [110.0, 200.0]),
         ];
-        assert_eq!(join_continuations(corner, None, 8.0).unwrap().len(), 2);
+        assert_eq!(
+            join_continuations(corner, None, 8.0, JOIN_GAP_WIDTHS)
+                .unwrap()
+                .len(),
+            2
+        );
         // In line, but more than 15 widths apart.
         let far = vec![
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([230.0, 100.0], [330.0, 100.0]),
         ];
-        assert_eq!(join_continuations(far, None, 8.0).unwrap().len(), 2);
+        assert_eq!(
+            join_continuations(far, None, 8.0, JOIN_GAP_WIDTHS)
+                .unwrap()
+                .len(),
+            2
+        );
         // Side by side, parallel: their ends are close, but one does not
         // lead into the other.
         let parallel = vec![
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([105.0, 112.0], [200.0, 112.0]),
         ];
-        assert_eq!(join_continuations(parallel, None, 8.0).unwrap().len(), 2);
+        assert_eq!(
+            join_continuations(parallel, None, 8.0, JOIN_GAP_WIDTHS)
+                .unwrap()
+                .len(),
+            2
+        );
     }
 
     #[test]
@@ -511,7 +536,27 @@ mod tests {
             segment_px([0.0, 100.0], [100.0, 100.0]),
             segment_px([104.0, 106.0], [200.0, 106.0]),
         ];
-        assert_eq!(join_continuations(pieces, None, 12.0).unwrap().len(), 1);
+        assert_eq!(
+            join_continuations(pieces, None, 12.0, JOIN_GAP_WIDTHS)
+                .unwrap()
+                .len(),
+            1
+        );
+    }
+
+    #[test]
+    fn a_wider_short_gap_joins_ends_that_bend_too_much_for_a_long_gap() {
+        // 8 px wide, 44 px apart, bending by 0.3 rad: over four widths
+        // (and 4 px), within six, and too bent for the long gap's rule.
+        let onward = [144.0 + 100.0 * 0.3_f64.cos(), 100.0 + 100.0 * 0.3_f64.sin()];
+        let pieces = vec![
+            segment_px([0.0, 100.0], [100.0, 100.0]),
+            segment_px([144.0, 100.0], onward),
+        ];
+        let joined =
+            |gap_widths| join_continuations(pieces.clone(), None, 8.0, gap_widths).unwrap();
+        assert_eq!(joined(JOIN_GAP_WIDTHS).len(), 2);
+        assert_eq!(joined(PAINTED_JOIN_GAP_WIDTHS).len(), 1);
     }
 
     /// `paths` drawn 8 px wide on a gray image, each in its colour.
@@ -541,7 +586,7 @@ mod tests {
         for (second, bgr, pieces) in [(&after, blue, 1), (&after, red, 2), (&bent, blue, 2)] {
             let image = drawn(&[(&before, blue), (second, bgr)]);
             let paths = vec![before.clone(), second.clone()];
-            let found = join_continuations(paths, Some(&image), 8.0).unwrap();
+            let found = join_continuations(paths, Some(&image), 8.0, JOIN_GAP_WIDTHS).unwrap();
             assert_eq!(found.len(), pieces);
         }
     }
@@ -563,7 +608,9 @@ mod tests {
     #[test]
     fn a_cable_bending_under_another_is_joined_across_it() {
         let [before, after, across] = bent_under();
-        let joined = |paths: Vec<Vec<[f64; 2]>>| join_continuations(paths, None, 8.0).unwrap();
+        let joined = |paths: Vec<Vec<[f64; 2]>>| {
+            join_continuations(paths, None, 8.0, JOIN_GAP_WIDTHS).unwrap()
+        };
         // Nothing between them: a corner, two cables.
         assert_eq!(joined(vec![before.clone(), after.clone()]).len(), 2);
         // A cable across the gap's middle: one cable passing under it.
@@ -589,7 +636,7 @@ mod tests {
                 (&across, Scalar::all(20.0)),
             ]);
             let paths = vec![before.clone(), across.clone(), after.clone()];
-            let found = join_continuations(paths, Some(&image), 8.0).unwrap();
+            let found = join_continuations(paths, Some(&image), 8.0, JOIN_GAP_WIDTHS).unwrap();
             assert_eq!(found.len(), pieces);
         }
     }

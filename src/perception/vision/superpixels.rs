@@ -228,12 +228,16 @@ fn width_px(mask: &Mat) -> Result<f64, VisionError> {
 
 /// Finds the cables in `mask` (CV_8U, non-zero = cable) over `image` (same
 /// size, any channels) by walks on the superpixel graph, with superpixels
-/// `region_widths` cable widths across.
+/// `region_widths` cable widths across; pieces are joined across gaps of
+/// up to `join_gap_widths` cable widths (see [`JOIN_GAP_WIDTHS`]).
+///
+/// [`JOIN_GAP_WIDTHS`]: super::paths::JOIN_GAP_WIDTHS
 pub fn paths_from_mask(
     image: &Mat,
     mask: &Mat,
     min_length_px: f64,
     region_widths: f64,
+    join_gap_widths: f64,
 ) -> Result<FoundPaths, VisionError> {
     let width_px = width_px(mask)?;
     let empty = FoundPaths {
@@ -294,5 +298,12 @@ pub fn paths_from_mask(
                 .collect(),
         );
     }
-    finish_paths(paths, mask, Some(image), width_px, min_length_px)
+    finish_paths(
+        paths,
+        mask,
+        Some(image),
+        width_px,
+        min_length_px,
+        join_gap_widths,
+    )
 }

@@ -38,7 +38,9 @@ struct LookAlikes {
     busy: bool,
     /// A painted background (busy and of many colours): more of what the
     /// network marks there is paint, so a detection must be more
-    /// confident (see [`VisionConfig::min_confidence`]).
+    /// confident (see [`VisionConfig::min_confidence`]), and paint of a
+    /// cable's colour cuts its mask for longer (see
+    /// [`paths::PAINTED_JOIN_GAP_WIDTHS`]).
     painted: bool,
 }
 
@@ -56,6 +58,16 @@ impl LookAlikes {
             PAINTED_MIN_CONFIDENCE_FACTOR * configured
         } else {
             configured
+        }
+    }
+
+    /// Across how many cable widths pieces that continue each other are
+    /// joined.
+    fn join_gap_widths(self) -> f64 {
+        if self.painted {
+            paths::PAINTED_JOIN_GAP_WIDTHS
+        } else {
+            paths::JOIN_GAP_WIDTHS
         }
     }
 }
@@ -254,12 +266,14 @@ impl Pipeline {
                 mask_roi,
                 (image_roi.channels() == 3).then_some(image_roi),
                 min_length_px,
+                look_alikes.join_gap_widths(),
             )?,
             InstanceMethod::Superpixels => superpixels::paths_from_mask(
                 image_roi,
                 mask_roi,
                 min_length_px,
                 self.config.superpixel_widths,
+                look_alikes.join_gap_widths(),
             )?,
         };
         let size_px = [f64::from(mask_roi.cols()), f64::from(mask_roi.rows())];

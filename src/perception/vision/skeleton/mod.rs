@@ -57,12 +57,17 @@ const SPUR_WIDTHS: f64 = 1.5;
 const SPUR_EXTRA_PX: f64 = 4.0;
 
 /// Finds the cables in a CV_8U mask (non-zero = cable): one path each, from
-/// end to end, of at least `min_length_px`. With the BGR `image` the mask
-/// was found in (of its size), crossings also pair branches by colour.
+/// end to end, of at least `min_length_px`, pieces joined across gaps of
+/// up to `join_gap_widths` cable widths (see [`JOIN_GAP_WIDTHS`]). With the
+/// BGR `image` the mask was found in (of its size), crossings also pair
+/// branches by colour.
+///
+/// [`JOIN_GAP_WIDTHS`]: super::paths::JOIN_GAP_WIDTHS
 pub fn paths_from_mask(
     mask: &Mat,
     image: Option<&Mat>,
     min_length_px: f64,
+    join_gap_widths: f64,
 ) -> Result<FoundPaths, VisionError> {
     let Skeleton {
         grid,
@@ -88,7 +93,7 @@ pub fn paths_from_mask(
         .into_iter()
         .flat_map(|path| cut_at_corners(path, span_px))
         .collect();
-    let found = finish_paths(paths, mask, image, width_px, min_length_px)?;
+    let found = finish_paths(paths, mask, image, width_px, min_length_px, join_gap_widths)?;
     Ok(FoundPaths {
         junctions: Some(junctions),
         ..found

@@ -505,7 +505,7 @@ mod tests {
     use super::super::paths_from_mask;
     use super::*;
     use crate::perception::vision::mask::zeros_u8;
-    use crate::perception::vision::paths::polyline_length;
+    use crate::perception::vision::paths::{JOIN_GAP_WIDTHS, polyline_length};
 
     /// The paths found in a 220 × 400 mask of `lines`, each a polyline
     /// through its points, with its width in pixels.
@@ -525,7 +525,7 @@ mod tests {
             )
             .unwrap();
         }
-        let found = paths_from_mask(&mask, None, 20.0).unwrap();
+        let found = paths_from_mask(&mask, None, 20.0, JOIN_GAP_WIDTHS).unwrap();
         found.paths.into_iter().map(|path| path.points_px).collect()
     }
 
