@@ -321,7 +321,7 @@ fn a_missing_model_is_refused_at_its_line_before_the_cell_moves() {
 fn a_missing_busy_scenes_model_is_refused_at_its_line_before_the_cell_moves() {
     let shipped = root().join("models/cable_segmentation.onnx");
     assert_missing_model_refused(
-        "\"../models/cable_segmentation.onnx\"\nbusy_model = \"../models/cable_segmentation_busy.onnx\"",
+        "\"../models/cable_segmentation.onnx\"\nbusy_model = \"../models/cable_segmentation_busy_mirrored.onnx\"",
         &format!(
             "{:?}\nbusy_model = \"no-such-busy-model.onnx\"",
             shipped.display().to_string()

@@ -228,7 +228,7 @@ fn run_without_prior(dir: &Path, cell: &Path, seed: u64) -> std::process::Output
 fn the_busy_scenes_model_beside_the_cell_file_sees_its_painted_scenes_only() {
     let dir = tempfile::tempdir().expect("tempdir");
     std::fs::write(dir.path().join("busy.onnx"), "not a network").expect("write");
-    let shipped = common::root().join("models/cable_segmentation_busy.onnx");
+    let shipped = common::root().join("models/cable_segmentation_busy_mirrored.onnx");
     let with_busy_model = |text: String| {
         let (head, tail) = text
             .split_once(&shipped.display().to_string())

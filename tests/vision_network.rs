@@ -225,35 +225,53 @@ fn the_8_bit_network_marks_what_the_float_one_marks() {
     }
 }
 
-/// The mirrored network is the shipped one run on the image and on its
-/// mirror image, the second probability map mirrored back, and the two
-/// averaged. At 0.5 the network sees exact 2 × 2 averages, which mirror
-/// with the image, so the mean made here must match it to float rounding.
-#[test]
-fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
-    let (mut plain, mut mirrored) = (net(), load(Path::new(MIRRORED_MODEL)));
+/// How far `network`'s looks at `image` and at its mirror images (OpenCV's
+/// flip codes `mirrors`), each mirrored back, lie apart at most, and how
+/// far `wrapped`'s probabilities lie from their mean at most; both at input
+/// scale 0.5, where the network sees exact 2 × 2 averages, which mirror
+/// with the image, so that a wrapper that averages those looks matches the
+/// mean made here to float rounding.
+fn looks_apart_and_wrapped_from_their_mean(
+    network: &Path,
+    wrapped: &Path,
+    image: &Mat,
+    mirrors: &[i32],
+) -> (f32, f32) {
+    let (mut plain, mut wrapped) = (load(network), load(wrapped));
     plain.input_scale = 0.5;
-    mirrored.input_scale = 0.5;
-    let image = draw_cable(wood(3), Scalar::new(170.0, 90.0, 30.0, 0.0)).0;
-    let flip = |m: &Mat| {
+    wrapped.input_scale = 0.5;
+    let flip = |m: &Mat, code: i32| {
         let mut out = Mat::default();
-        opencv::core::flip(m, &mut out, 1).unwrap();
+        opencv::core::flip(m, &mut out, code).unwrap();
         out
     };
-    let seen = plain.probability(&image).unwrap();
-    let seen_mirrored = flip(&plain.probability(&flip(&image)).unwrap());
-    let averaged = mirrored.probability(&image).unwrap();
-    let (mut most_apart, mut worst) = (0.0f32, 0.0f32);
-    for ((a, b), m) in seen
-        .data_typed::<f32>()
-        .unwrap()
-        .iter()
-        .zip(seen_mirrored.data_typed::<f32>().unwrap())
-        .zip(averaged.data_typed::<f32>().unwrap())
-    {
-        most_apart = most_apart.max((a - b).abs());
-        worst = worst.max((m - (a + b) / 2.0).abs());
+    let seen = plain.probability(image).unwrap();
+    let mut looks = vec![seen.data_typed::<f32>().unwrap().to_vec()];
+    for &code in mirrors {
+        let back = flip(&plain.probability(&flip(image, code)).unwrap(), code);
+        looks.push(back.data_typed::<f32>().unwrap().to_vec());
     }
+    let averaged = wrapped.probability(image).unwrap();
+    let (mut most_apart, mut worst) = (0.0f32, 0.0f32);
+    for (i, m) in averaged.data_typed::<f32>().unwrap().iter().enumerate() {
+        let at_i = looks.iter().map(|look| look[i]);
+        let (low, high) = at_i
+            .clone()
+            .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p), h.max(p)));
+        most_apart = most_apart.max(high - low);
+        worst = worst.max((m - at_i.sum::<f32>() / looks.len() as f32).abs());
+    }
+    (most_apart, worst)
+}
+
+/// The mirrored network is the shipped one run on the image and on its
+/// mirror image (left for right), the second probability map mirrored
+/// back, and the two averaged.
+#[test]
+fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
+    let image = draw_cable(wood(3), Scalar::new(170.0, 90.0, 30.0, 0.0)).0;
+    let (most_apart, worst) =
+        looks_apart_and_wrapped_from_their_mean(&model(), Path::new(MIRRORED_MODEL), &image, &[1]);
     eprintln!("the two views differ by up to {most_apart}; the mirrored network by {worst}");
     assert!(
         most_apart > 0.01,
@@ -262,6 +280,33 @@ fn the_mirrored_network_averages_the_shipped_one_on_the_image_and_its_mirror() {
     assert!(
         worst < 1e-4,
         "the mirrored network is {worst} from the mean of the two views"
+    );
+}
+
+/// The shipped network for painted scenes is the busy network run on a
+/// painted scene, on its mirror image left for right, top for bottom and
+/// both, each probability map mirrored back, and the four averaged.
+#[test]
+fn the_busy_scenes_network_averages_four_looks_at_a_painted_scene() {
+    let paint = common::scenes::draw_scene(480, 640, Background::Pollock, 0.0, Vec::new(), 5)
+        .expect("paint")
+        .bgr;
+    let image = draw_cable(paint, Scalar::new(40.0, 40.0, 200.0, 0.0)).0;
+    let one_look = common::root().join("models/cable_segmentation_busy.onnx");
+    let (most_apart, worst) = looks_apart_and_wrapped_from_their_mean(
+        &one_look,
+        Path::new(BUSY_MODEL),
+        &image,
+        &[1, 0, -1],
+    );
+    eprintln!("the four views differ by up to {most_apart}; the shipped busy network by {worst}");
+    assert!(
+        most_apart > 0.01,
+        "the busy network sees each mirror image as it sees the image: the test shows nothing"
+    );
+    assert!(
+        worst < 1e-4,
+        "the shipped busy network is {worst} from the mean of the four views"
     );
 }
 

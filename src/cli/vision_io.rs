@@ -31,7 +31,7 @@ pub struct VisionArgs {
     #[arg(long, value_enum, default_value = "skeleton")]
     pub instances: InstancesArg,
     /// The segmentation network [default: models/cable_segmentation.onnx,
-    /// with models/cable_segmentation_busy.onnx for painted scenes]; given
+    /// with models/cable_segmentation_busy_mirrored.onnx for painted scenes]; given
     /// alone, it sees every scene.
     #[arg(long)]
     pub model: Option<PathBuf>,
