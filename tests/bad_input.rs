@@ -247,6 +247,15 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
 }
 
 #[test]
+fn a_busy_threshold_out_of_range_is_refused_at_its_line() {
+    assert_cell_refused_at_its_line(
+        "net_scale = 0.5",
+        "net_scale = 0.5\nbusy_threshold = 1.5",
+        "busy_threshold: expected a fraction in [0, 1], found 1.5",
+    );
+}
+
+#[test]
 fn a_negative_working_width_is_refused_at_its_line() {
     assert_cell_refused_at_its_line(
         "straight_edge_radius_px = 0.0",

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use cablecell::perception::vision::background::background_stats;
 use cablecell::perception::vision::eval::{self, GroundTruth};
 use cablecell::perception::vision::network::{
-    BUSY_MODEL, DEFAULT_MODEL, FLOAT_MODEL, InputScales, LazyNetwork, MIRRORED_MODEL, NetworkError,
-    SegmentationNet,
+    BUSY_MODEL, DEFAULT_BUSY_THRESHOLD, DEFAULT_MODEL, DEFAULT_THRESHOLD, FLOAT_MODEL, InputScales,
+    LazyNetwork, MIRRORED_MODEL, NetworkError, SegmentationNet,
 };
 use cablecell::perception::vision::{MaskNetwork, Pipeline, VisionConfig, VisionError};
 use cablecell::sim::render::Background;
@@ -313,11 +313,12 @@ fn the_busy_scenes_network_averages_four_looks_at_a_painted_scene() {
 /// Given a network for busy scenes, a scene on paint goes to it, and one
 /// on a plain table or on wood (busy, but of one hue) to the first
 /// network, each at the input scale its background asks for: the
-/// probabilities must be those of the network chosen, run alone.
+/// probabilities must be those of the network chosen, run alone, and they
+/// are cut at that network's threshold.
 #[test]
 fn a_painted_scene_goes_to_the_busy_network_and_wood_or_a_plain_one_to_the_first() {
     let mut routed = LazyNetwork::new(model(), runtime_library())
-        .with_busy_model(Some(PathBuf::from(BUSY_MODEL)));
+        .with_busy_model(Some(PathBuf::from(BUSY_MODEL)), DEFAULT_BUSY_THRESHOLD);
     let (mut first, mut busy) = (net(), load(Path::new(BUSY_MODEL)));
     let scales = InputScales::default();
     let paint = common::scenes::draw_scene(480, 640, Background::Pollock, 0.0, Vec::new(), 5)
@@ -353,6 +354,16 @@ fn a_painted_scene_goes_to_the_busy_network_and_wood_or_a_plain_one_to_the_first
         first.input_scale = scale;
         busy.input_scale = scale;
         let seen = routed.mask(&image, &stats).unwrap();
+        let threshold = if busy_scene {
+            DEFAULT_BUSY_THRESHOLD
+        } else {
+            DEFAULT_THRESHOLD
+        };
+        assert_eq!(
+            routed.threshold(&stats),
+            f64::from(threshold),
+            "{name}: not the chosen network's threshold"
+        );
         let (by_first, by_busy) = (
             first.probability(&image).unwrap(),
             busy.probability(&image).unwrap(),
@@ -392,8 +403,8 @@ fn a_painted_scene_goes_to_the_busy_network_and_wood_or_a_plain_one_to_the_first
 #[test]
 fn a_missing_busy_scenes_model_is_reported_on_loading() {
     let missing = common::root().join("models/no-such-busy-model.onnx");
-    let mut routed =
-        LazyNetwork::new(model(), runtime_library()).with_busy_model(Some(missing.clone()));
+    let mut routed = LazyNetwork::new(model(), runtime_library())
+        .with_busy_model(Some(missing.clone()), DEFAULT_BUSY_THRESHOLD);
     match routed.load() {
         Err(VisionError::Network {
             source: NetworkError::ModelMissing { path, .. },

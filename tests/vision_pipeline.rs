@@ -14,7 +14,7 @@ use cablecell::perception::vision::{
 };
 use cablecell::sim::render::{Background, CableSpec, RenderedScene};
 use common::scenes::{demo_scene, draw_scene, matte_cable, midpoint_px};
-use opencv::core::{self, Mat, Point, Rect, Scalar, Vector};
+use opencv::core::{self, CV_32F, Mat, Point, Rect, Scalar, Vector};
 use opencv::imgproc;
 use opencv::prelude::*;
 
@@ -1206,6 +1206,56 @@ fn on_paint_a_cable_is_joined_across_a_longer_gap_in_its_mask() {
             out.background
         );
         assert_eq!(out.cables.len(), pieces, "{background:?}: {:?}", out.notes);
+    }
+}
+
+/// A network whose probability on the cable is 0.45, and which cuts a
+/// painted scene's probabilities at 0.4 and others' at 0.5, as the shipped
+/// pair does: the mean of four looks is a smoother map.
+struct FaintOnPaint {
+    cable_mask: Mat,
+}
+
+impl MaskNetwork for FaintOnPaint {
+    fn mask(&mut self, _bgr: &Mat, _background: &BackgroundStats) -> Result<Mat, VisionError> {
+        let mut probability = Mat::default();
+        self.cable_mask
+            .convert_to(&mut probability, CV_32F, 0.45 / 255.0, 0.0)
+            .expect("the cable's probability");
+        Ok(probability)
+    }
+
+    fn threshold(&self, background: &BackgroundStats) -> f64 {
+        if background.painted() { 0.4 } else { 0.5 }
+    }
+}
+
+#[test]
+fn a_painted_scene_is_cut_at_its_own_networks_threshold() {
+    let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
+    let keep_all = VisionConfig {
+        mask: MaskMethod::Network,
+        min_confidence: 0.0,
+        ..keep_straight()
+    };
+    for (background, found) in [(Background::Pollock, 1), (Background::Wood, 0)] {
+        let scene = draw_scene(
+            480,
+            640,
+            background.clone(),
+            0.0,
+            vec![cable(curve.clone(), [40, 40, 220])],
+            7,
+        )
+        .unwrap();
+        let mut net = FaintOnPaint {
+            cable_mask: scene.union_mask.clone(),
+        };
+        let out = Pipeline::new(keep_all.clone())
+            .detect(&scene.bgr, Some(&mut net))
+            .unwrap();
+        assert_eq!(out.background.painted(), found == 1, "{:?}", out.background);
+        assert_eq!(out.cables.len(), found, "{background:?}: {:?}", out.notes);
     }
 }
 

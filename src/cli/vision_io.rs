@@ -8,8 +8,8 @@ use cablecell::cell::{CellFile, load_cell_uncalibrated};
 use cablecell::detector::config::{DetectorBackend, VisionDetectorConfig};
 
 use cablecell::perception::vision::network::{
-    BUSY_MODEL, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
-    MAX_INPUT_SCALE, runtime_library,
+    BUSY_MODEL, DEFAULT_BUSY_THRESHOLD, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, DEFAULT_THRESHOLD,
+    InputScales, LazyNetwork, MAX_INPUT_SCALE, runtime_library,
 };
 use cablecell::perception::vision::superpixels::DEFAULT_REGION_WIDTHS;
 use cablecell::perception::vision::{
@@ -48,6 +48,11 @@ pub struct VisionArgs {
     /// The network's probability above which a pixel is cable.
     #[arg(long, default_value_t = DEFAULT_THRESHOLD, value_parser = probability)]
     pub threshold: f32,
+    /// The same in a painted scene, for the network for busy scenes: the
+    /// shipped one averages four looks, whose smoother map is cut best
+    /// lower; one that looks once is cut best at 0.5.
+    #[arg(long, default_value_t = DEFAULT_BUSY_THRESHOLD, value_parser = probability)]
+    pub busy_threshold: f32,
     /// The network's input size as a fraction of the image's (0.5: 320×240
     /// for 640×480; smaller is faster).
     #[arg(long, default_value_t = DEFAULT_INPUT_SCALE, value_parser = input_scale)]
@@ -192,7 +197,7 @@ impl VisionArgs {
                 self.threshold,
                 InputScales::new(self.net_scale, self.close_net_scale),
             )
-            .with_busy_model(busy_model)
+            .with_busy_model(busy_model, self.busy_threshold)
     }
 }
 

@@ -11,8 +11,8 @@ use crate::hw::camera::config::CalibrationConfig;
 use crate::perception::vision::calibration::CameraModel;
 use crate::perception::vision::grasp_frame::{ImageToBase, PlaneInBase};
 use crate::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork, MAX_INPUT_SCALE,
-    input_scale_is_valid, runtime_library,
+    DEFAULT_BUSY_THRESHOLD, DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
+    MAX_INPUT_SCALE, input_scale_is_valid, runtime_library,
 };
 use crate::perception::vision::{InstanceMethod, MaskMethod, Pipeline, VisionConfig};
 use crate::schema::validate::{finite, fraction, non_negative, unit_vector3, vector3};
@@ -43,6 +43,10 @@ fn default_work_width_px() -> u32 {
 
 fn default_min_confidence() -> f64 {
     VisionConfig::default().min_confidence
+}
+
+fn default_busy_threshold() -> f64 {
+    f64::from(DEFAULT_BUSY_THRESHOLD)
 }
 
 fn default_net_scale() -> f64 {
@@ -85,6 +89,12 @@ pub struct VisionDetectorConfig {
     /// file; without it `model` sees every scene.
     #[serde(default)]
     pub busy_model: Option<PathBuf>,
+    /// The probability above which a pixel is cable in a painted scene,
+    /// for `busy_model` (default [`DEFAULT_BUSY_THRESHOLD`], for the
+    /// shipped one, which averages four looks; a network that looks once
+    /// is cut best at 0.5).
+    #[serde(default = "default_busy_threshold", deserialize_with = "fraction")]
+    pub busy_threshold: f64,
     /// The ONNX Runtime library, relative to the cell file (default:
     /// `$ORT_DYLIB_PATH`, else where the set-up puts it).
     #[serde(default)]
@@ -169,7 +179,7 @@ impl VisionDetectorConfig {
             DEFAULT_THRESHOLD,
             InputScales::new(self.net_scale, self.close_net_scale),
         )
-        .with_busy_model(self.busy_model.clone())
+        .with_busy_model(self.busy_model.clone(), self.busy_threshold as f32)
     }
 
     /// How image points become base-frame points for a camera at

@@ -24,7 +24,7 @@ use crate::campaign::stats::Summary;
 use crate::hw::camera::{ImageError, read_image};
 use crate::perception::vision::eval::{GroundTruth, labelled_images, score, summarize};
 use crate::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
+    DEFAULT_BUSY_THRESHOLD, DEFAULT_INPUT_SCALE, DEFAULT_THRESHOLD, InputScales, LazyNetwork,
 };
 use crate::perception::vision::{
     InstanceMethod, MaskMethod, MaskNetwork, Pipeline, VisionConfig, VisionError, VisionSkip,
@@ -407,7 +407,7 @@ pub fn run_vision(
         let mut network = setting.input_scales.map(|scales| {
             LazyNetwork::new(model.to_path_buf(), runtime_library.to_path_buf())
                 .tuned(DEFAULT_THRESHOLD, scales)
-                .with_busy_model(busy_model.map(Path::to_path_buf))
+                .with_busy_model(busy_model.map(Path::to_path_buf), DEFAULT_BUSY_THRESHOLD)
         });
         let mut scores = Vec::with_capacity(set.images.len());
         let mut total_ms = Vec::with_capacity(set.images.len());

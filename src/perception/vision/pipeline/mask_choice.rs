@@ -26,8 +26,9 @@ pub trait MaskNetwork {
     fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError>;
 
     /// The probability above which a pixel is cable, for a network that
-    /// gives probabilities.
-    fn threshold(&self) -> f64 {
+    /// gives probabilities, on `background` (a network may cut a painted
+    /// scene's elsewhere).
+    fn threshold(&self, _background: &BackgroundStats) -> f64 {
         0.5
     }
 }
@@ -134,7 +135,7 @@ fn network_mask(
         }
     };
     let size = work.size().map_err(cv("image size"))?;
-    let threshold = net.threshold();
+    let threshold = net.threshold(background);
     let binary = mask::binarize_network_mask(&raw, size, threshold)?;
     let belief = Belief::of(raw, size, threshold)?;
     Ok((mask::clean_mask(&binary, min_blob_area_px)?, belief))
