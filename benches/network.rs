@@ -2,9 +2,10 @@
 //! post-processing included (resize down, ONNX Runtime with 2 intra-op
 //! threads, resize the probability up, threshold): what `SegmentationNet::
 //! mask` costs the detector per camera frame, at three input sizes, and
-//! the float network it was quantized from; and the whole pipeline with
-//! it, on the image and on the image enlarged to 1280 × 960 and
-//! 1920 × 1440. Uses the
+//! the float network it was quantized from, and the network for painted
+//! scenes at their scale, looking once and four times; and the whole
+//! pipeline with it, on the image and on the image enlarged to 1280 × 960
+//! and 1920 × 1440. Uses the
 //! first held-out photograph of cables-dev when it lies beside the
 //! project, else a drawn image. The ONNX Runtime library comes from
 //! `ORT_DYLIB_PATH`, else from `.setup/onnxruntime/` (run `scripts/setup`).
@@ -12,7 +13,8 @@
 use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::network::{
-    DEFAULT_INPUT_SCALE, DEFAULT_MODEL, FLOAT_MODEL, SegmentationNet,
+    BUSY_MODEL, DEFAULT_CLOSE_INPUT_SCALE, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, FLOAT_MODEL,
+    SegmentationNet,
 };
 use cablecell::perception::vision::{MaskMethod, MaskNetwork, Pipeline, VisionConfig};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -91,6 +93,25 @@ fn bench(c: &mut Criterion) {
             b.iter(|| float.mask(std::hint::black_box(&image)).expect("inference"));
         },
     );
+    // The network for painted scenes, at the scale it sees them: the
+    // busy network looking once, and the shipped one, which averages it
+    // over the image and its three mirror images.
+    let one_look = root.join("models/cable_segmentation_busy.onnx");
+    for (looks, model) in [
+        ("one look", one_look.to_str().expect("a UTF-8 path")),
+        ("four looks", BUSY_MODEL),
+    ] {
+        let mut busy = load(model);
+        busy.input_scale = DEFAULT_CLOSE_INPUT_SCALE;
+        c.bench_function(
+            &format!(
+                "busy network mask 640x480 at input scale {DEFAULT_CLOSE_INPUT_SCALE}, {looks}"
+            ),
+            |b| {
+                b.iter(|| busy.mask(std::hint::black_box(&image)).expect("inference"));
+            },
+        );
+    }
     // Image in, grasp frames out, as the cell's detector runs it (no
     // cable masks); and from cameras two and three times as fine, whose
     // images are worked on shrunk to 640 px wide
