@@ -1153,6 +1153,20 @@ fn on_paint_a_detection_must_be_more_confident_than_on_wood() {
     }
 }
 
+/// A 640 × 480 scene of `background` (seed 7) with one red cable along
+/// `curve`.
+fn red_cable_on(background: Background, curve: &[[f64; 2]]) -> RenderedScene {
+    draw_scene(
+        480,
+        640,
+        background,
+        0.0,
+        vec![cable(curve.to_vec(), [40, 40, 220])],
+        7,
+    )
+    .unwrap()
+}
+
 #[test]
 fn on_paint_a_cable_is_joined_across_a_longer_gap_in_its_mask() {
     // Two straight runs that meet at a bend of 0.35 rad, too sharp for
@@ -1171,15 +1185,7 @@ fn on_paint_a_cable_is_joined_across_a_longer_gap_in_its_mask() {
         ..keep_straight()
     };
     for (background, pieces) in [(Background::Pollock, 1), (Background::Wood, 2)] {
-        let scene = draw_scene(
-            480,
-            640,
-            background.clone(),
-            0.0,
-            vec![cable(curve.clone(), [40, 40, 220])],
-            7,
-        )
-        .unwrap();
+        let scene = red_cable_on(background.clone(), &curve);
         let mut mask = scene.union_mask.clone();
         let centre = Point::new(bend_px[0] as i32, bend_px[1] as i32);
         imgproc::circle(
@@ -1239,15 +1245,7 @@ fn a_painted_scene_is_cut_at_its_own_networks_threshold() {
         ..keep_straight()
     };
     for (background, found) in [(Background::Pollock, 1), (Background::Wood, 0)] {
-        let scene = draw_scene(
-            480,
-            640,
-            background.clone(),
-            0.0,
-            vec![cable(curve.clone(), [40, 40, 220])],
-            7,
-        )
-        .unwrap();
+        let scene = red_cable_on(background.clone(), &curve);
         let mut net = FaintOnPaint {
             cable_mask: scene.union_mask.clone(),
         };
@@ -1326,15 +1324,7 @@ fn paint_as_flat_as_a_stroke_is_dropped_and_a_shaded_cable_kept() {
 #[test]
 fn a_busy_background_takes_the_network_or_says_it_fell_back() {
     let curve = arc_px([320.0, 560.0], 380.0, -2.3, -0.8);
-    let scene = draw_scene(
-        480,
-        640,
-        Background::Wood,
-        0.0,
-        vec![cable(curve.clone(), [40, 40, 220])],
-        7,
-    )
-    .unwrap();
+    let scene = red_cable_on(Background::Wood, &curve);
 
     let mut net = KnownMask::new(scene.union_mask.clone());
     let mut auto = Pipeline::new(keep_straight());
