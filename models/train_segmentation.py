@@ -4,7 +4,7 @@
 The network turns a BGR camera image into the probability, per pixel, that
 the pixel belongs to an electrical cable. It is a small (185k parameters)
 U-Net that runs at half the camera's resolution (320x240 for a 640x480
-image); the Rust side (src/perception/vision/network.rs) resizes the image
+image); the Rust side (src/perception/vision/network/) resizes the image
 down, runs the model with ONNX Runtime, resizes the probability map back up
 and thresholds it.
 
@@ -676,7 +676,7 @@ def export(model: CableNet, out: Path) -> None:
 
 def net_size(w: int, h: int) -> tuple[int, int]:
     """The network's input size for an image of w x h: half size, rounded to
-    multiples of 16 (the same rule as network.rs)."""
+    multiples of 16 (the same rule as network/mod.rs)."""
     return max(1, round(w / 32)) * 16, max(1, round(h / 32)) * 16
 
 
@@ -686,7 +686,7 @@ def input_type(session) -> type:
 
 
 def predict(session, img: np.ndarray) -> np.ndarray:
-    """Probability at the image's full size, as network.rs computes it."""
+    """Probability at the image's full size, as network/mod.rs computes it."""
     h, w = img.shape[:2]
     nw, nh = net_size(w, h)
     small = cv2.resize(img, (nw, nh), interpolation=cv2.INTER_AREA)[None].astype(input_type(session))
