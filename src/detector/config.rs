@@ -133,7 +133,7 @@ pub struct VisionDetectorConfig {
     /// Detections less confident than this, 0 to 1, are dropped as
     /// probably not cables (default
     /// [`crate::perception::vision::DEFAULT_MIN_CONFIDENCE`]); 0 keeps
-    /// them all; a tenth higher on a painted background. A cell that holds
+    /// them all; a fifth higher on a painted background. A cell that holds
     /// its one cable in a fixture may trust a fainter detection than a
     /// busy scene can.
     #[serde(default = "default_min_confidence", deserialize_with = "fraction")]
