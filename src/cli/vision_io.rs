@@ -92,7 +92,7 @@ pub struct VisionArgs {
     pub straight_edge_radius_px: f64,
     /// Drop detections less confident than this (0 to 1; see `detect`'s
     /// `confidence`): splashes of paint, brushed strokes and flat paint; 0 keeps all.
-    /// A tenth higher on a painted background (paint, prints, mosaics).
+    /// A fifth higher on a painted background (paint, prints, mosaics).
     #[arg(long, default_value_t = DEFAULT_MIN_CONFIDENCE, value_parser = confidence)]
     pub min_confidence: f64,
 }
