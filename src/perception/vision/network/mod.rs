@@ -5,7 +5,8 @@
 //! The pipeline for a BGR image of W × H (640 × 480 from the camera):
 //! 1. resize to the network's size, half the image's rounded to multiples
 //!    of 16 (320 × 240; [`SegmentationNet::input_scale`] sets the
-//!    fraction), with area averaging (`INTER_AREA`);
+//!    fraction), with area averaging (OpenCV's `INTER_AREA`, computed
+//!    faster where its factor is not whole: `area_shrink.rs`);
 //! 2. feed it as `[1, h, w, 3]`, NHWC, the B, G, R values unscaled: the
 //!    bytes themselves to the 8-bit model, float32 0..255 to the float one
 //!    (see [`InputKind`]); the model normalises inside;
@@ -30,7 +31,9 @@ use ort::value::{DynValueRef, PrimitiveTensorElementType, TensorElementType, Ten
 
 use super::{BackgroundStats, MaskNetwork, VisionError};
 
+mod area_shrink;
 mod lazy;
+use area_shrink::shrink_by_area;
 pub use lazy::LazyNetwork;
 
 /// Intra-op threads of a session: the cell's computer has two cores.
@@ -349,7 +352,7 @@ pub struct SegmentationNet {
     pub input_scale: f64,
     /// Scratch buffers, reused between images (`input` for a float
     /// model only).
-    small: Mat,
+    small: Vec<u8>,
     input: Vec<f32>,
 }
 
@@ -420,7 +423,7 @@ impl SegmentationNet {
             input_kind,
             threshold: DEFAULT_THRESHOLD,
             input_scale: DEFAULT_INPUT_SCALE,
-            small: Mat::default(),
+            small: Vec::new(),
             input: Vec::new(),
         })
     }
@@ -441,19 +444,9 @@ impl SegmentationNet {
             });
         }
         let (w, h) = network_size(bgr.cols(), bgr.rows(), self.input_scale);
-        imgproc::resize(
-            bgr,
-            &mut self.small,
-            Size::new(w, h),
-            0.0,
-            0.0,
-            imgproc::INTER_AREA,
-        )
-        .map_err(cv("resize to the network's input size"))?;
-        let bytes = self
-            .small
-            .data_bytes()
-            .map_err(cv("read the resized image"))?;
+        shrink_by_area(bgr, Size::new(w, h), &mut self.small)
+            .map_err(cv("resize to the network's input size"))?;
+        let bytes = self.small.as_slice();
         let shape = (1, h as usize, w as usize, 3);
         let input = match self.input_kind {
             InputKind::Bytes => input_tensor(shape, bytes)?,
