@@ -6,11 +6,10 @@
 //! the network was trained on. At a whole-number factor on both axes
 //! (0.5: 640 × 480 to 320 × 240) it is quick. At any other (0.375: 640 ×
 //! 480 to 240 × 176, the default) OpenCV 4.6 takes a general path that
-//! cost about 1.1 ms a 640 × 480 image on a 2-core machine, a tenth of the
-//! whole pipeline. This computes the same bytes as that path, the same
-//! single-precision sums in the same order, in a third of the time
-//! (docs/vision-record.md, "The network's input shrunk faster"); a test
-//! holds it to OpenCV's bytes.
+//! took a tenth of the whole pipeline's time. This computes the same
+//! bytes as that path, the same single-precision sums in the same order,
+//! in about half its time (docs/vision-record.md, "The network's input
+//! shrunk faster"); a test holds it to OpenCV's bytes.
 
 use opencv::core::{Mat, Size, ToInputArray};
 use opencv::imgproc;
