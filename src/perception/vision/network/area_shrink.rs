@@ -106,7 +106,8 @@ fn nearest_byte(v: f32) -> u8 {
 /// adds 0 and leaves the sum as it was.
 fn average_across(row: &[f32], across: &Shares, out: &mut [f32]) {
     match across.taps {
-        0..=2 => average_across_by::<2>(row, across, out),
+        1 => average_across_by::<1>(row, across, out),
+        2 => average_across_by::<2>(row, across, out),
         3 => average_across_by::<3>(row, across, out),
         4 => average_across_by::<4>(row, across, out),
         _ => average_across_by::<0>(row, across, out),
@@ -239,6 +240,9 @@ mod tests {
             (97, 61, 96, 20),
             (5, 5, 3, 2),
             (7, 3, 1, 1),
+            // One source pixel to each output pixel on one axis.
+            (16, 50, 16, 16),
+            (50, 16, 16, 16),
         ];
         for (seed, (cols, rows, width, height)) in cases.into_iter().enumerate() {
             let img = image(cols, rows, seed as u64);
