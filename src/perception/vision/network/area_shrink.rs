@@ -58,8 +58,9 @@ pub(super) fn shrink_by_area(
     let mut sum = vec![0f32; row_len];
     out.resize(row_len * height, 0);
     for (y, out_row) in out.chunks_exact_mut(row_len).enumerate() {
-        let weights_y = down.weights(y);
-        for (k, &weight_y) in weights_y.iter().enumerate() {
+        // 0 plus the first share is that share exactly, as OpenCV sets it.
+        sum.fill(0.0);
+        for (k, &weight_y) in down.weights(y).iter().enumerate() {
             let source_y = down.first[y] + k;
             if weight_y == 0.0 {
                 // Padding: no share of a row past this output pixel's.
@@ -73,14 +74,8 @@ pub(super) fn shrink_by_area(
                 average_across(&source_row, &across, &mut across_row);
                 across_of = source_y;
             }
-            if k == 0 {
-                for (s, &a) in sum.iter_mut().zip(&across_row) {
-                    *s = weight_y * a;
-                }
-            } else {
-                for (s, &a) in sum.iter_mut().zip(&across_row) {
-                    *s += weight_y * a;
-                }
+            for (s, &a) in sum.iter_mut().zip(&across_row) {
+                *s += weight_y * a;
             }
         }
         for (o, &s) in out_row.iter_mut().zip(&sum) {
