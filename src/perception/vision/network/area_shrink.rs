@@ -258,6 +258,29 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        /// Any size to any other, smaller or larger on either axis: the
+        /// sizes above are chosen, these are not.
+        #[test]
+        fn the_bytes_are_opencvs_at_any_size(
+            cols in 1..=200i32,
+            rows in 1..=200i32,
+            width_share in 0.0..2.0f64,
+            height_share in 0.0..2.0f64,
+            seed: u64,
+        ) {
+            let size = Size::new(
+                ((f64::from(cols) * width_share) as i32).max(1),
+                ((f64::from(rows) * height_share) as i32).max(1),
+            );
+            let img = image(cols, rows, seed);
+            let mut ours = Vec::new();
+            shrink_by_area(&img, size, &mut ours).unwrap();
+            proptest::prop_assert!(ours == opencv_area(&img, size), "{cols}x{rows} to {size:?}");
+        }
+    }
+
     #[test]
     fn a_view_into_a_larger_image_shrinks_as_its_copy() {
         let whole = image(700, 500, 7);
