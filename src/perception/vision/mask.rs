@@ -20,6 +20,7 @@ use opencv::prelude::*;
 use super::background::{
     BackgroundStats, PLAIN_MIN_FRACTION, blurred_lab, plain_test_lab, share_near, shrunk,
 };
+use super::blobs;
 use super::error::{VisionError, cv};
 
 /// Side of the square blur applied before measuring colour distance: it
@@ -317,50 +318,13 @@ fn morphology(mask: &Mat, op: i32, side_px: i32, what: &'static str) -> Result<M
 }
 
 /// Keeps the 8-connected blobs of at least `min_area_px` pixels of a 0/255
-/// mask. Only the dropped blobs' bounding boxes are touched: most masks
-/// drop few blobs, all small.
+/// mask (CV_8UC1).
 fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
-    let mut labels = Mat::default();
-    let mut stats = Mat::default();
-    let mut centroids = Mat::default();
-    let count = imgproc::connected_components_with_stats(
-        mask,
-        &mut labels,
-        &mut stats,
-        &mut centroids,
-        8,
-        core::CV_32S,
-    )
-    .map_err(cv("label mask blobs"))?;
+    // A clone is continuous, whatever `mask` is.
     let mut out = mask.try_clone().map_err(cv("copy mask"))?;
-    let stat = |label: i32, which: i32| {
-        stats
-            .at_2d::<i32>(label, which)
-            .copied()
-            .map_err(cv("read blob statistics"))
-    };
-    for label in 1..count {
-        if f64::from(stat(label, imgproc::CC_STAT_AREA)?) >= min_area_px {
-            continue;
-        }
-        let bounds = core::Rect::new(
-            stat(label, imgproc::CC_STAT_LEFT)?,
-            stat(label, imgproc::CC_STAT_TOP)?,
-            stat(label, imgproc::CC_STAT_WIDTH)?,
-            stat(label, imgproc::CC_STAT_HEIGHT)?,
-        );
-        let mut is_blob = Mat::default();
-        core::compare(
-            &Mat::roi(&labels, bounds).map_err(cv("blob's labels"))?,
-            &Scalar::all(f64::from(label)),
-            &mut is_blob,
-            core::CMP_EQ,
-        )
-        .map_err(cv("find blob"))?;
-        Mat::roi_mut(&mut out, bounds)
-            .and_then(|mut roi| roi.set_to(&Scalar::all(0.0), &is_blob).map(|_| ()))
-            .map_err(cv("drop blob"))?;
-    }
+    let cols = usize::try_from(out.cols()).unwrap_or(0);
+    let bytes = out.data_typed_mut::<u8>().map_err(cv("mask pixels"))?;
+    blobs::clear_small_blobs(bytes, cols, min_area_px);
     Ok(out)
 }
 

@@ -4,6 +4,7 @@
 //! and the grasp frame at its middle.
 
 pub mod background;
+mod blobs;
 pub mod calibration;
 pub mod curves;
 pub mod error;
