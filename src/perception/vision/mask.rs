@@ -20,8 +20,8 @@ use opencv::prelude::*;
 use super::background::{
     BackgroundStats, PLAIN_MIN_FRACTION, blurred_lab, plain_test_lab, share_near, shrunk,
 };
-use super::blobs;
 use super::error::{VisionError, cv};
+use super::runs;
 
 /// Side of the square blur applied before measuring colour distance: it
 /// averages sensor noise and fine texture out while keeping cables of a
@@ -324,7 +324,7 @@ fn drop_small_blobs(mask: &Mat, min_area_px: f64) -> Result<Mat, VisionError> {
     let mut out = mask.try_clone().map_err(cv("copy mask"))?;
     let cols = usize::try_from(out.cols()).unwrap_or(0);
     let bytes = out.data_typed_mut::<u8>().map_err(cv("mask pixels"))?;
-    blobs::clear_small_blobs(bytes, cols, min_area_px);
+    runs::clear_small_blobs(bytes, cols, min_area_px);
     Ok(out)
 }
 

@@ -4,7 +4,6 @@
 //! and the grasp frame at its middle.
 
 pub mod background;
-mod blobs;
 pub mod calibration;
 pub mod curves;
 pub mod error;
@@ -14,6 +13,7 @@ pub mod mask;
 pub mod network;
 pub mod paths;
 pub mod pipeline;
+mod runs;
 pub mod skeleton;
 pub mod spline;
 pub mod superpixels;

@@ -15,6 +15,7 @@ use opencv::prelude::*;
 
 use crate::perception::vision::error::{VisionError, cv};
 use crate::perception::vision::mask::continuous;
+use crate::perception::vision::runs::runs;
 
 /// A mask's skeleton, and the cables' typical width it gives.
 pub(super) struct Skeleton {
@@ -29,8 +30,7 @@ pub(super) struct Skeleton {
 
 /// The skeleton of a CV_8U mask (non-zero = cable).
 pub(super) fn skeleton(mask: &Mat) -> Result<Skeleton, VisionError> {
-    let mut grid = Grid::from_mask(mask)?;
-    let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
+    let (mut grid, mut fg) = Grid::from_mask(mask)?;
     let area = fg.len() as f64;
     grid.thin(&mut fg);
     grid.remove_redundant(&mut fg);
@@ -55,27 +55,29 @@ pub(super) struct Grid {
 }
 
 impl Grid {
-    /// Pads a CV_8U mask (non-zero = cable).
-    fn from_mask(mask: &Mat) -> Result<Grid, VisionError> {
+    /// Pads a CV_8U mask (non-zero = cable), and lists its pixels on, in
+    /// the grid's order.
+    fn from_mask(mask: &Mat) -> Result<(Grid, Vec<usize>), VisionError> {
         let mask = continuous(mask)?;
         let bytes = mask.data_bytes().map_err(cv("read mask"))?;
         let rows = usize::try_from(mask.rows()).unwrap_or(0);
         let cols = usize::try_from(mask.cols()).unwrap_or(0);
         let stride = cols + 2;
         let mut on = vec![0u8; stride * (rows + 2)];
-        for (y, row) in bytes.chunks_exact(cols.max(1)).take(rows).enumerate() {
-            let base = (y + 1) * stride + 1;
-            for (x, &v) in row.iter().enumerate() {
-                on[base + x] = u8::from(v != 0);
-            }
+        let mut fg = Vec::new();
+        for run in runs(bytes, cols).0 {
+            let base = (run.row + 1) * stride + 1;
+            on[base + run.start..base + run.end].fill(1);
+            fg.extend(base + run.start..base + run.end);
         }
         let s = stride as isize;
-        Ok(Grid {
+        let grid = Grid {
             stride,
             on,
             // N, NE, E, SE, S, SW, W, NW: clockwise from north.
             offsets: [-s, -s + 1, 1, s + 1, s, s - 1, -1, -s - 1],
-        })
+        };
+        Ok((grid, fg))
     }
 
     pub(super) fn xy(&self, i: usize) -> [f64; 2] {
@@ -321,8 +323,9 @@ mod tests {
         // pixel (it never thins the outermost rows and columns).
         for seed in 0..200 {
             let mask = random_mask(seed);
-            let mut grid = Grid::from_mask(&mask).unwrap();
-            let mut fg: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
+            let (mut grid, mut fg) = Grid::from_mask(&mask).unwrap();
+            let on: Vec<usize> = (0..grid.on.len()).filter(|&i| grid.on[i] != 0).collect();
+            assert_eq!(fg, on, "the pixels listed are those on, in order");
             grid.thin(&mut fg);
             let mut padded = Mat::default();
             opencv::core::copy_make_border(

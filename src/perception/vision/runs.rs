@@ -1,25 +1,23 @@
-//! The 8-connected blobs of a mask, found from its runs: each row's
-//! stretches of set pixels, joined to the runs they touch in the row above
-//! by union–find.
+//! A mask's runs, each row's stretches of set pixels, and the 8-connected
+//! blobs they make, each run joined to the runs it touches in the row
+//! above by union–find.
 //!
-//! OpenCV's `connectedComponentsWithStats` labels every pixel of the image;
-//! a cable mask is mostly empty, and its few thousand runs are joined in a
-//! fraction of that time (docs/vision-record.md, "Small blobs dropped by
-//! runs"). A test holds the blobs to OpenCV's.
+//! A cable mask is mostly empty: its runs are found skipping eight empty
+//! bytes at a time, and its blobs from its few thousand runs in a fraction
+//! of the time OpenCV's `connectedComponentsWithStats` takes to label every
+//! pixel (docs/vision-record.md, "The mask's runs"). A test holds the
+//! blobs to OpenCV's.
 
 /// A row's stretch of set pixels: `start..end` of row `row`.
-struct Run {
-    row: usize,
-    start: usize,
-    end: usize,
+pub(super) struct Run {
+    pub row: usize,
+    pub start: usize,
+    pub end: usize,
 }
 
 /// Clears, in `bytes` (a mask of `cols` bytes a row, set where not 0),
 /// every 8-connected blob of fewer than `min_area_px` set pixels.
 pub(super) fn clear_small_blobs(bytes: &mut [u8], cols: usize, min_area_px: f64) {
-    if cols == 0 {
-        return;
-    }
     let (runs, row_first) = runs(bytes, cols);
     let mut blob: Vec<usize> = (0..runs.len()).collect();
     for row in 1..row_first.len() - 1 {
@@ -49,17 +47,22 @@ pub(super) fn clear_small_blobs(bytes: &mut [u8], cols: usize, min_area_px: f64)
     }
 }
 
-/// The mask's runs, row by row and left to right, and where each row's
-/// runs begin in them (one entry more than rows: the end).
-fn runs(bytes: &[u8], cols: usize) -> (Vec<Run>, Vec<usize>) {
+/// The runs of a mask of `cols` bytes a row (set where not 0), row by row
+/// and left to right, and where each row's runs begin in them (one entry
+/// more than rows: the end; a lone 0 where `cols` is 0).
+pub(super) fn runs(bytes: &[u8], cols: usize) -> (Vec<Run>, Vec<usize>) {
     let mut runs = Vec::new();
     let mut row_first = vec![0];
+    if cols == 0 {
+        return (runs, row_first);
+    }
     for (row, pixels) in bytes.chunks_exact(cols).enumerate() {
         let mut x = 0;
         while x < cols {
             // Most of a cable mask is empty: skip it eight bytes at a time.
             while let Some(eight) = pixels.get(x..x + 8)
-                && eight.iter().all(|&b| b == 0)
+                && let Ok(word) = <[u8; 8]>::try_from(eight)
+                && u64::from_ne_bytes(word) == 0
             {
                 x += 8;
             }
