@@ -59,7 +59,8 @@ impl Grid {
     /// the grid's order.
     fn from_mask(mask: &Mat) -> Result<(Grid, Vec<usize>), VisionError> {
         let mask = continuous(mask)?;
-        let bytes = mask.data_bytes().map_err(cv("read mask"))?;
+        // A mask of more channels is refused here, not read past the grid.
+        let bytes = mask.data_typed::<u8>().map_err(cv("read mask"))?;
         let rows = usize::try_from(mask.rows()).unwrap_or(0);
         let cols = usize::try_from(mask.cols()).unwrap_or(0);
         let stride = cols + 2;
@@ -315,6 +316,20 @@ mod tests {
             .unwrap();
         }
         mask
+    }
+
+    #[test]
+    fn a_mask_of_three_channels_is_refused() {
+        let mask =
+            Mat::new_rows_cols_with_default(60, 80, opencv::core::CV_8UC3, Scalar::all(255.0))
+                .unwrap();
+        assert!(matches!(
+            skeleton(&mask),
+            Err(VisionError::OpenCv {
+                stage: "read mask",
+                ..
+            })
+        ));
     }
 
     #[test]
