@@ -416,6 +416,18 @@ pub fn half_width_at(half_widths: &Mat, p: [f64; 2]) -> f64 {
         .map_or(0.0, |h| f64::from(*h))
 }
 
+/// The mask's width (twice its half width, `half_widths`: its distance
+/// transform) at each of `points_px` that lies on it.
+pub fn widths_along(half_widths: &Mat, points_px: &[[f64; 2]]) -> Vec<f64> {
+    points_px
+        .iter()
+        .filter_map(|&p| {
+            let half = half_width_at(half_widths, p);
+            (half > 0.0).then_some(2.0 * half)
+        })
+        .collect()
+}
+
 /// A CV_8U mask of `rows`×`cols` with every pixel 0.
 pub fn zeros_u8(rows: i32, cols: i32) -> Result<Mat, VisionError> {
     Mat::new_rows_cols_with_default(rows, cols, core::CV_8U, Scalar::all(0.0))

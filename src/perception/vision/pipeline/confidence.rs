@@ -162,13 +162,7 @@ pub(super) fn confidence(
     typical_width_px: Option<f64>,
     lightness_spread: Option<f64>,
 ) -> f64 {
-    let mut widths: Vec<f64> = points_px
-        .iter()
-        .filter_map(|&p| {
-            let half = mask::half_width_at(half_widths, p);
-            (half > 0.0).then_some(2.0 * half)
-        })
-        .collect();
+    let mut widths = mask::widths_along(half_widths, points_px);
     // Not `<= 0.0`: a NaN width has no confidence either.
     let positive = |w: f64| w.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater);
     let Some(width) = median(&mut widths) else {

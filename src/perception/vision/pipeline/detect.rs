@@ -14,7 +14,7 @@ use super::confidence::{self, Belief};
 use super::config::{
     BUSY_MIN_LENGTH_FACTOR, InstanceMethod, MaskMethod, PAINTED_MIN_CONFIDENCE_FACTOR,
 };
-use super::draw::{mask_in_image, path_mask, union_mask};
+use super::draw::{cable_masks, mask_in_image, union_mask};
 use super::mask_choice::{MaskChoice, MaskNetwork, choose_mask};
 use super::output::{CableInstance, MaskInstances, VisionOutput, VisionSkip};
 use super::straight_edge::{EDGE_NOISE_SAGITTA_PX, looks_like_edge, straight_cable};
@@ -383,15 +383,20 @@ impl Pipeline {
         timings_ms.push(("spline", ms_since(start)));
 
         let start = Instant::now();
-        let thickness = (1.5 * found.width_px).ceil().max(1.0) as i32 + 2;
+        let band_px = (1.5 * found.width_px).ceil().max(1.0) as i32 + 2;
+        let owns = if self.config.cable_masks {
+            let paths: Vec<&[[f64; 2]]> = fitted.iter().map(|f| f.0.points_px.as_slice()).collect();
+            cable_masks(mask_roi, &half_widths, &paths, band_px)?
+                .iter()
+                .map(|own| mask_in_image(own, roi, full).map(Some))
+                .collect::<Result<Vec<_>, _>>()?
+        } else {
+            vec![None; fitted.len()]
+        };
         let mut cables = Vec::with_capacity(fitted.len());
-        for (path, spline, samples_px, grasp_px, direction_rad, confidence) in fitted {
-            let mask = if self.config.cable_masks {
-                let own = path_mask(mask_roi, &path.points_px, thickness)?;
-                Some(mask_in_image(&own, roi, full)?)
-            } else {
-                None
-            };
+        for ((path, spline, samples_px, grasp_px, direction_rad, confidence), mask) in
+            fitted.into_iter().zip(owns)
+        {
             cables.push(CableInstance {
                 spline,
                 samples_px,
