@@ -191,19 +191,7 @@ pub fn union_mask(cables: &[CableInstance], full: Rect) -> Result<Mat, VisionErr
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn along(from: [f64; 2], to: [f64; 2]) -> Vec<[f64; 2]> {
-        let steps = (to[0] - from[0]).abs().max((to[1] - from[1]).abs()) as usize;
-        (0..=steps)
-            .map(|i| {
-                let t = i as f64 / steps as f64;
-                [
-                    from[0] + t * (to[0] - from[0]),
-                    from[1] + t * (to[1] - from[1]),
-                ]
-            })
-            .collect()
-    }
+    use crate::perception::vision::curves::segment_px;
 
     fn count(mask: &Mat) -> i32 {
         core::count_non_zero(mask).unwrap()
@@ -224,8 +212,8 @@ mod tests {
         // A 21 px cable across, a 7 px one down; the band is wide enough
         // for the thick one, so the thin one's band takes in 16 px of the
         // thick one on each side of its path.
-        let thick = along([20.0, 100.0], [280.0, 100.0]);
-        let thin = along([150.0, 20.0], [150.0, 180.0]);
+        let thick = segment_px([20.0, 100.0], [280.0, 100.0]);
+        let thin = segment_px([150.0, 20.0], [150.0, 180.0]);
         let mut mask = draw_paths(200, 300, &[&thick], 21).unwrap();
         let thin_drawn = draw_paths(200, 300, &[&thin], 7).unwrap();
         let mask_copy = mask.clone();
@@ -265,11 +253,11 @@ mod tests {
     fn a_lone_cable_keeps_its_whole_band_where_its_box_meets_the_edge() {
         // Worked on in a box around it, cut by the image's edges: the same
         // pixels as the band drawn over the whole mask.
-        let mask = draw_paths(120, 160, &[&along([0.0, 3.0], [159.0, 119.0])], 9).unwrap();
+        let mask = draw_paths(120, 160, &[&segment_px([0.0, 3.0], [159.0, 119.0])], 9).unwrap();
         let half_widths = mask::half_widths(&mask).unwrap();
         for path in [
-            along([0.0, 3.0], [159.0, 119.0]),
-            along([0.3, 2.6], [60.5, 47.5]),
+            segment_px([0.0, 3.0], [159.0, 119.0]),
+            segment_px([0.3, 2.6], [60.5, 47.5]),
             vec![[156.0, 117.0], [159.0, 119.0]],
         ] {
             let owns = cable_masks(&mask, &half_widths, &[&path], 15).unwrap();
