@@ -47,12 +47,12 @@ pub(super) fn mask_in_image(own: &Mat, roi: Rect, full: Rect) -> Result<Mat, Vis
 /// and still be the cable's own: the rim where cable and background blend.
 const OWN_RIM_PX: f64 = 1.5;
 
-/// Each path's own pixels of `mask`, in the mask's pixels: those within
-/// `band_px` (a width) of the path, save those that lie within another
-/// cable's own width of its path and not within this one's. A cable's
-/// own width is the median of the mask's widths along its path
-/// (`half_widths`: the mask's distance transform) plus [`OWN_RIM_PX`] on
-/// each side; the band is as wide as the image's thickest cables need.
+/// Each path's own pixels of `mask`, in the mask's pixels: those of a
+/// band `band_px` wide along the path (wide enough for the image's
+/// thicker cables), save those that lie within another cable's own width
+/// of its path and not within this one's. A cable's own width is the
+/// median of the mask's widths along its path (`half_widths`: the mask's
+/// distance transform) plus [`OWN_RIM_PX`] on each side.
 /// Where a thick and a thin cable cross, the thick one's pixels beyond
 /// the thin one's rim are the thick one's alone, and the crossing itself
 /// is both cables'. Every pixel of a band stays some cable's, so the
