@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use cablecell::perception::vision::network::{
-    BUSY_MODEL, DEFAULT_CLOSE_INPUT_SCALE, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, FLOAT_MODEL,
+    BUSY_MODEL, DEFAULT_BUSY_INPUT_SCALE, DEFAULT_INPUT_SCALE, DEFAULT_MODEL, FLOAT_MODEL,
     SegmentationNet,
 };
 use cablecell::perception::vision::{MaskMethod, MaskNetwork, Pipeline, VisionConfig};
@@ -102,10 +102,10 @@ fn bench(c: &mut Criterion) {
         ("four looks", BUSY_MODEL),
     ] {
         let mut busy = load(model);
-        busy.input_scale = DEFAULT_CLOSE_INPUT_SCALE;
+        busy.input_scale = DEFAULT_BUSY_INPUT_SCALE;
         c.bench_function(
             &format!(
-                "busy network mask 640x480 at input scale {DEFAULT_CLOSE_INPUT_SCALE}, {looks}"
+                "busy network mask 640x480 at input scale {DEFAULT_BUSY_INPUT_SCALE}, {looks}"
             ),
             |b| {
                 b.iter(|| busy.mask(std::hint::black_box(&image)).expect("inference"));

@@ -244,6 +244,11 @@ fn a_network_input_size_out_of_range_is_refused_at_its_line() {
         "net_scale = 0.5\nclose_net_scale = 0.0",
         "close_net_scale 0 is outside (0, 2]",
     );
+    assert_cell_refused_at_its_line(
+        "net_scale = 0.5",
+        "net_scale = 0.5\nbusy_net_scale = 2.5",
+        "busy_net_scale 2.5 is outside (0, 2]",
+    );
 }
 
 #[test]

@@ -346,7 +346,9 @@ fn a_painted_scene_goes_to_the_busy_network_and_wood_or_a_plain_one_to_the_first
                 "wood: not busy, so the test shows nothing: {stats:?}"
             );
         }
-        let scale = if stats.closer_look() {
+        let scale = if busy_scene {
+            scales.busy
+        } else if stats.closer_look() {
             scales.close
         } else {
             scales.normal

@@ -29,8 +29,9 @@ pub enum DetectorBackend {
     /// Reads the simulated cable's true pose and adds noise: a stand-in
     /// for the vision pipeline, named as such.
     Oracle(OracleConfig),
-    /// The vision pipeline on the camera's image (the paper's Section II).
-    Vision(VisionDetectorConfig),
+    /// The vision pipeline on the camera's image (the paper's Section II);
+    /// boxed, as its settings are many times the oracle's.
+    Vision(Box<VisionDetectorConfig>),
 }
 
 fn default_straight_edge_radius_px() -> f64 {
@@ -59,6 +60,10 @@ fn net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error
 
 fn close_net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<f64>, D::Error> {
     scale_in_range("close_net_scale", f64::deserialize(deserializer)?).map(Some)
+}
+
+fn busy_net_scale<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<f64>, D::Error> {
+    scale_in_range("busy_net_scale", f64::deserialize(deserializer)?).map(Some)
 }
 
 fn scale_in_range<E: serde::de::Error>(field: &str, scale: f64) -> Result<f64, E> {
@@ -115,6 +120,11 @@ pub struct VisionDetectorConfig {
     /// see [`InputScales`]).
     #[serde(default, deserialize_with = "close_net_scale")]
     pub close_net_scale: Option<f64>,
+    /// The same for `busy_model` in a painted scene (default
+    /// [`crate::perception::vision::network::DEFAULT_BUSY_INPUT_SCALE`], or
+    /// `close_net_scale` where that is larger; see [`InputScales`]).
+    #[serde(default, deserialize_with = "busy_net_scale")]
+    pub busy_net_scale: Option<f64>,
     /// Images are worked on at this width (px), shrunk or enlarged
     /// (default [`VisionConfig::work_width_px`]; 0: at their own size).
     #[serde(default = "default_work_width_px")]
@@ -133,7 +143,7 @@ pub struct VisionDetectorConfig {
     /// Detections less confident than this, 0 to 1, are dropped as
     /// probably not cables (default
     /// [`crate::perception::vision::DEFAULT_MIN_CONFIDENCE`]); 0 keeps
-    /// them all; a fifth higher on a painted background. A cell that holds
+    /// them all; 1.35 times this on a painted background. A cell that holds
     /// its one cable in a fixture may trust a fainter detection than a
     /// busy scene can.
     #[serde(default = "default_min_confidence", deserialize_with = "fraction")]
@@ -177,7 +187,7 @@ impl VisionDetectorConfig {
         )
         .tuned(
             DEFAULT_THRESHOLD,
-            InputScales::new(self.net_scale, self.close_net_scale),
+            InputScales::new(self.net_scale, self.close_net_scale, self.busy_net_scale),
         )
         .with_busy_model(self.busy_model.clone(), self.busy_threshold as f32)
     }

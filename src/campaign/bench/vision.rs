@@ -225,9 +225,10 @@ pub fn vision_settings() -> Vec<VisionSetting> {
     settings.push(VisionSetting::new(
         "mask",
         format!(
-            "{DEFAULT_SETTING}: {}, {}× on a varied or dark background, skeleton",
+            "{DEFAULT_SETTING}: {}, {}× on a varied or dark background, {}× on paint, skeleton",
             network(defaults.normal),
-            defaults.close
+            defaults.close,
+            defaults.busy
         ),
         MaskMethod::Network,
         Some(defaults),

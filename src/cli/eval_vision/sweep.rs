@@ -53,6 +53,7 @@ fn sweep_settings(base: &VisionArgs) -> Vec<(String, VisionArgs)> {
         let mut args = base.clone();
         change(&mut args);
         args.close_net_scale = Some(args.net_scale);
+        args.busy_net_scale = Some(args.net_scale);
         args
     };
     let mut settings = vec![(

@@ -51,7 +51,8 @@ impl LazyNetwork {
     /// The same with `busy_model`, when given, for the scenes whose
     /// background is painted ([`BackgroundStats::painted`]): a network trained
     /// more on them (`models/README.md`, "The network for busy scenes"),
-    /// whose probabilities are cut at `busy_threshold`.
+    /// whose probabilities are cut at `busy_threshold`, at the input scales'
+    /// `busy` scale.
     pub fn with_busy_model(self, busy_model: Option<PathBuf>, busy_threshold: f32) -> Self {
         Self {
             busy_model,
@@ -104,18 +105,26 @@ fn loaded<'a>(
 
 impl MaskNetwork for LazyNetwork {
     fn mask(&mut self, bgr: &Mat, background: &BackgroundStats) -> Result<Mat, VisionError> {
-        let (slot, model, threshold) = match &self.busy_model {
-            Some(busy_model) if background.painted() => {
-                (&mut self.loaded_busy, busy_model, self.busy_threshold)
-            }
-            _ => (&mut self.loaded, &self.model, self.threshold),
+        let (slot, model, threshold, input_scale) = match &self.busy_model {
+            Some(busy_model) if background.painted() => (
+                &mut self.loaded_busy,
+                busy_model,
+                self.busy_threshold,
+                self.input_scales.busy,
+            ),
+            _ => (
+                &mut self.loaded,
+                &self.model,
+                self.threshold,
+                if background.closer_look() {
+                    self.input_scales.close
+                } else {
+                    self.input_scales.normal
+                },
+            ),
         };
         let net = loaded(slot, model, &self.runtime_library, threshold)?;
-        net.input_scale = if background.closer_look() {
-            self.input_scales.close
-        } else {
-            self.input_scales.normal
-        };
+        net.input_scale = input_scale;
         MaskNetwork::mask(net, bgr, background)
     }
 

@@ -60,28 +60,39 @@ pub const DEFAULT_INPUT_SCALE: f64 = 0.375;
 /// (see [`InputScales`]), unless set otherwise.
 pub const DEFAULT_CLOSE_INPUT_SCALE: f64 = 0.5;
 
-/// The network's input scales: `normal`, and `close` for an image whose
+/// The network for busy scenes' input side over the image's on a painted
+/// background (see [`InputScales`]), unless set otherwise.
+pub const DEFAULT_BUSY_INPUT_SCALE: f64 = 0.625;
+
+/// The network's input scales: `normal`; `close` for an image whose
 /// background is far from one colour (paint, prints) or dark
-/// ([`crate::perception::vision::background::BackgroundStats::closer_look`]). There the
-/// network tells a cable from paint strokes of its colour, and a tube from
-/// dark cloth, better when it looks closer; on the photographs' bright
-/// cloth, wood and paper the smaller scale is faster and counts as many
-/// right (docs/vision-record.md, "Busy scenes: the paper's kind" and
-/// "Closer on dark backgrounds too").
+/// ([`crate::perception::vision::background::BackgroundStats::closer_look`]);
+/// and `busy`, the network for busy scenes' on a painted background
+/// ([`crate::perception::vision::background::BackgroundStats::painted`]).
+/// There the network tells a cable from paint strokes of its colour, and a
+/// tube from dark cloth, better when it looks closer, and the busy network
+/// finds more real cables over paint closer still; on the photographs'
+/// bright cloth, wood and paper the smaller scale is faster and counts as
+/// many right (docs/vision-record.md, "Busy scenes: the paper's kind",
+/// "Closer on dark backgrounds too" and "Paint seen closer").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InputScales {
     pub normal: f64,
     pub close: f64,
+    pub busy: f64,
 }
 
 impl InputScales {
-    /// `normal`, and `close` when given, else [`DEFAULT_CLOSE_INPUT_SCALE`]
-    /// or `normal` where that is larger: such a scene is never looked at
-    /// less closely than another.
-    pub fn new(normal: f64, close: Option<f64>) -> Self {
+    /// `normal`; `close` when given, else [`DEFAULT_CLOSE_INPUT_SCALE`] or
+    /// `normal` where that is larger; `busy` when given, else
+    /// [`DEFAULT_BUSY_INPUT_SCALE`] or `close` where that is larger: such a
+    /// scene is never looked at less closely than another.
+    pub fn new(normal: f64, close: Option<f64>, busy: Option<f64>) -> Self {
+        let close = close.unwrap_or(DEFAULT_CLOSE_INPUT_SCALE.max(normal));
         Self {
             normal,
-            close: close.unwrap_or(DEFAULT_CLOSE_INPUT_SCALE.max(normal)),
+            close,
+            busy: busy.unwrap_or(DEFAULT_BUSY_INPUT_SCALE.max(close)),
         }
     }
 
@@ -90,13 +101,14 @@ impl InputScales {
         Self {
             normal: scale,
             close: scale,
+            busy: scale,
         }
     }
 }
 
 impl Default for InputScales {
     fn default() -> Self {
-        Self::new(DEFAULT_INPUT_SCALE, None)
+        Self::new(DEFAULT_INPUT_SCALE, None, None)
     }
 }
 
@@ -590,6 +602,20 @@ impl MaskNetwork for SegmentationNet {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_closer_scene_is_never_seen_at_a_smaller_scale_unless_told() {
+        let scales = |normal, close, busy| {
+            let s = InputScales::new(normal, close, busy);
+            (s.normal, s.close, s.busy)
+        };
+        assert_eq!(scales(0.375, None, None), (0.375, 0.5, 0.625));
+        assert_eq!(scales(0.75, None, None), (0.75, 0.75, 0.75));
+        assert_eq!(scales(0.375, Some(0.7), None), (0.375, 0.7, 0.7));
+        // Given, each is kept as it is: a cell may trade accuracy for time.
+        assert_eq!(scales(0.375, Some(0.5), Some(0.4)), (0.375, 0.5, 0.4));
+        assert_eq!(InputScales::default(), InputScales::new(0.375, None, None));
+    }
 
     #[test]
     fn network_size_scales_and_rounds_to_16() {

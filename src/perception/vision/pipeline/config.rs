@@ -113,8 +113,9 @@ pub const DEFAULT_MIN_CONFIDENCE: f64 = 0.45;
 /// How many times [`VisionConfig::min_confidence`] a detection must be on
 /// a painted background (paint, prints, mosaics of many colours), where
 /// more of what the network marks is paint (docs/vision-record.md, "A
-/// higher floor on paint", "The floor on paint with four looks").
-pub const PAINTED_MIN_CONFIDENCE_FACTOR: f64 = 1.2;
+/// higher floor on paint", "The floor on paint with four looks", "Paint
+/// seen closer").
+pub const PAINTED_MIN_CONFIDENCE_FACTOR: f64 = 1.35;
 
 /// How many times [`VisionConfig::min_cable_length_px`] a path must be on
 /// a busy background, where the network marks scraps and splashes of
