@@ -8,7 +8,7 @@ top for bottom and both ways; with eight, also each of those four with rows
 for columns. Its contract is the network's own (models/README.md,
 "Contract"), so the pipeline runs it as it runs any other model: it takes
 as many times the network's time as it has looks and, on busy scenes,
-counts more cables right (models/README.md, "The mirrored network", "The
+counts more cables right (models/history.md, "The mirrored network", "The
 busy network seen four ways"). The weights are shared, not copied. Run
 from the project's root, e.g.
     .venv-train/bin/python models/mirror_segmentation.py models/cable_segmentation.onnx \

@@ -5,7 +5,7 @@ A labelled cable counts as pale where the mean brightness (HSV value) of
 its mask's pixels is at least 150 and their mean saturation under 60:
 white and light grey insulation. The held-out photographs hold such
 cables about three times as often as the training ones, and over light
-paint the network missed them most (models/README.md, "Pale cables").
+paint the network missed them most (models/history.md, "Pale cables").
 Run from the project's root, e.g.
     target/release/cablecell eval-vision target/vision-sets/pheld --json > pheld.json
     .venv-train/bin/python models/pale_labels.py pheld.json target/vision-sets/pheld

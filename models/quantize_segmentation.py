@@ -3,7 +3,8 @@
 
 The 8-bit model is the one the Rust side runs: on 2 CPU cores with VNNI
 (AVX-512 or AVX-VNNI) it runs 1.2 to 1.6 times as fast as the float one,
-and its masks match the float ones' (models/README.md has the figures).
+and its masks match the float ones' (models/history.md, "Quantization
+measured", has the figures).
 Weights are quantized per output channel to 7 bits of the 8 (see
 `quantize`); activations to 8 bits, with the ranges
 (min/max) they take on the training photographs of cables-dev, at the two

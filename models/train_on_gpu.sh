@@ -7,7 +7,7 @@
 #
 # LIMIT: seconds of training for each run (the script fits its schedule
 # to them). LR_A, SEED_A, LR_B, SEED_B: each run's learning rate and seed;
-# run a takes the mix of r1 and r2, run b r3's (the model card's "The
+# run a takes the mix of r1 and r2, run b r3's (models/history.md, "The
 # network shipped now"). PY, DEVICE, WORKERS, BATCH, STEPS, EVERY: to try
 # the command on a CPU first, e.g.
 #   OUT=/tmp/o PY=.venv-train/bin/python DEVICE=cpu WORKERS=2 BATCH=16 STEPS=30 EVERY=10 \

@@ -111,7 +111,7 @@ class CableNet(nn.Module):
     convolutions each, strided at the start of each scale), and a decoder that
     upsamples bilinearly, adds a 1x1-projected skip and convolves once per
     scale; a 1x1 head gives one logit per pixel. With `from_half` the first
-    scale is left out (models/README.md says what that cost). `deep_blocks`
+    scale is left out (models/history.md says what that cost). `deep_blocks`
     residual blocks at the coarsest scale add capacity and context at almost
     no cost in time; each starts as the identity, so a network fine-tuned
     from one without them starts where it stood."""
@@ -272,7 +272,7 @@ def made_pale(rng: np.random.Generator, patch: np.ndarray, pm: np.ndarray) -> np
     """A cut-out cable turned white or pale grey, its sheen and shading
     kept: the training photographs hold few such cables (about one in
     twelve), and a light one over light paint is what the network misses
-    most (models/README.md, "Pale cables")."""
+    most (models/history.md, "Pale cables")."""
     gray = patch.astype(np.float32).mean(axis=2, keepdims=True)
     mean = float(gray[pm > 0.5].mean())  # load_cutouts keeps cutouts of 30 px or more
     pale = rng.uniform(165, 240) + (gray - mean) * rng.uniform(0.5, 1.2) + rng.uniform(-10, 10, 3)
@@ -756,7 +756,7 @@ def main() -> int:
     parser.add_argument("--paste-fraction", type=float, default=0.5,
                         help="share of busy images that get real cables pasted over them")
     parser.add_argument("--pale-fraction", type=float, default=0.0,
-                        help="share of pasted cables made white or pale grey (made_pale; models/README.md, "
+                        help="share of pasted cables made white or pale grey (made_pale; models/history.md, "
                              "\"Pale cables\")")
     parser.add_argument("--checkpoint-every", type=int, default=200,
                         help="steps between checkpoints (OUT_STEM.checkpoint.pt beside the model)")
@@ -768,17 +768,17 @@ def main() -> int:
                              "and the logits are upsampled at the end (faster on CPUs without 8-bit dot products)")
     parser.add_argument("--deep-blocks", type=int, default=0,
                         help="residual blocks at the coarsest scale (CableNet's deep_blocks; "
-                             "not used for the shipped model, see models/README.md)")
+                             "not used for the shipped model, see models/history.md)")
     parser.add_argument("--resume", action="store_true", help="go on from the checkpoint, if there is one")
     parser.add_argument("--recolour-fraction", type=float, default=0.0,
                         help="share of rendered images whose background is given a strong hue "
-                             "(recolour_background; not used for the shipped model, see models/README.md)")
+                             "(recolour_background; not used for the shipped model, see models/history.md)")
     parser.add_argument("--cl-dice-weight", type=float, default=0.0,
                         help="weight of a clDice term in the loss, which keeps cables whole "
-                             "(0: none; not used for the shipped model, see models/README.md)")
+                             "(0: none; not used for the shipped model, see models/history.md)")
     parser.add_argument("--hard-of", type=int, default=1,
                         help="each busy crop is the hardest of this many for the network as it trains "
-                             "(models/README.md, \"Hard busy crops\"; the shipped model does not use it)")
+                             "(models/history.md, \"Hard busy crops\"; the shipped model does not use it)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--device", default="cpu", help="cpu, or cuda (models/README.md, \"Training on a GPU\")")
     parser.add_argument("--workers", type=int, default=0,

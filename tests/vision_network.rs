@@ -491,7 +491,7 @@ fn a_wrong_image_is_reported() {
 /// The held-out photographs 00030..00044 of cables-dev (not used in
 /// training): mean union DICE at threshold 0.5 and the default input size.
 /// Measured with the shipped model: DICE 0.6732, IoU 0.5093
-/// (models/README.md says why the labels hold it there); this allows 0.02
+/// (models/history.md says why the labels hold it there); this allows 0.02
 /// less.
 const HELD_OUT_MIN_DICE: f64 = 0.654;
 
@@ -529,7 +529,7 @@ fn held_out_real_photographs() {
 /// the labelled centre lines on average, most of it in three images where
 /// a detection has no label: 00031, where the folder's punched edge is
 /// taken for a cable (18.5 px), and 00037 and 00044, whose unlabelled wires
-/// at the border are found (14.3 and 15.0 px). models/README.md says why the
+/// at the border are found (14.3 and 15.0 px). models/history.md says why the
 /// first two are low. The bounds allow a little drift (a count one image
 /// lower), keep the grasp point inside the 5 px goal, and fail on a worse
 /// model or pipeline. Of the 95 labelled cables, 5 are not found, all

@@ -50,7 +50,7 @@ impl LazyNetwork {
 
     /// The same with `busy_model`, when given, for the scenes whose
     /// background is painted ([`BackgroundStats::painted`]): a network trained
-    /// more on them (`models/README.md`, "The network for busy scenes"),
+    /// more on them (`models/history.md`, "The network for busy scenes"),
     /// whose probabilities are cut at `busy_threshold`, at the input scales'
     /// `busy` scale.
     pub fn with_busy_model(self, busy_model: Option<PathBuf>, busy_threshold: f32) -> Self {

@@ -45,7 +45,7 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// The same in a painted scene, for the shipped busy network
 /// ([`BUSY_MODEL`]): the mean of its four looks is a smoother map than one
 /// look's, and on real cables over paint it counts most right when cut at
-/// 0.4 (`models/README.md`, "The busy network seen four ways"). A busy
+/// 0.4 (`models/history.md`, "The busy network seen four ways"). A busy
 /// network that looks once is cut best at [`DEFAULT_THRESHOLD`].
 pub const DEFAULT_BUSY_THRESHOLD: f32 = 0.4;
 
@@ -552,7 +552,7 @@ pub const FLOAT_MODEL: &str = concat!(
 /// The shipped network wrapped to see the image mirrored too
 /// (`models/mirror_segmentation.py`): the mean of its probabilities on the
 /// image and on its mirror image, in twice the time; it counts more cables
-/// right on busy scenes (`models/README.md`, "The mirrored network").
+/// right on busy scenes (`models/history.md`, "The mirrored network").
 pub const MIRRORED_MODEL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/models/cable_segmentation_mirrored.onnx"
@@ -560,14 +560,14 @@ pub const MIRRORED_MODEL: &str = concat!(
 
 /// The network for busy scenes (paint, prints, mosaics): two fine-tunes
 /// of the shipped one on more of them, averaged and quantized
-/// (`models/README.md`, "The network for busy scenes"). It counts more
+/// (`models/history.md`, "The network for busy scenes"). It counts more
 /// real cables over paint right but fewer on the photographs' tables and
 /// grasps worse on a workbench, so it sees the painted scenes alone
 /// ([`LazyNetwork::with_busy_model`]). It sees the image and its three
 /// mirror images (left for right, top for bottom, both), averaged
 /// (`models/mirror_segmentation.py --looks 4`): in four times the
 /// network's time on those scenes it counts more cables right and grasps
-/// nearer their centre lines (`models/README.md`, "The busy network seen
+/// nearer their centre lines (`models/history.md`, "The busy network seen
 /// four ways").
 pub const BUSY_MODEL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
