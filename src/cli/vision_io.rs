@@ -50,8 +50,7 @@ pub struct VisionArgs {
     pub threshold: f32,
     /// The same in a painted scene, for the network for busy scenes: the
     /// shipped one averages four looks, whose smoother map is cut best
-    /// lower; the shipped one that looks once counts most at 0.4 too,
-    /// networks before it at 0.5.
+    /// lower.
     #[arg(long, default_value_t = DEFAULT_BUSY_THRESHOLD, value_parser = probability)]
     pub busy_threshold: f32,
     /// The network's input size as a fraction of the image's (0.5: 320×240

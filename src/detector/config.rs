@@ -95,9 +95,8 @@ pub struct VisionDetectorConfig {
     #[serde(default)]
     pub busy_model: Option<PathBuf>,
     /// The probability above which a pixel is cable in a painted scene,
-    /// for `busy_model` (default [`DEFAULT_BUSY_THRESHOLD`], for the
-    /// shipped one, which averages four looks; the shipped one that looks
-    /// once counts most at 0.4 too, networks before it at 0.5).
+    /// for `busy_model` (default [`DEFAULT_BUSY_THRESHOLD`], which says
+    /// why).
     #[serde(default = "default_busy_threshold", deserialize_with = "fraction")]
     pub busy_threshold: f64,
     /// The ONNX Runtime library, relative to the cell file (default:
