@@ -45,10 +45,10 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// The same in a painted scene, for the shipped busy network
 /// ([`BUSY_MODEL`]): the mean of its four looks is a smoother map than one
 /// look's, and on real cables over paint it counts most right when cut at
-/// 0.4 (`models/history.md`, "The busy network seen four ways"). So does
-/// the shipped busy network looking once; those before it counted most at
+/// 0.4 (`models/history.md`, "The busy network seen four ways"). Looking
+/// once, the shipped busy network counts about as many at 0.4 as at
 /// [`DEFAULT_THRESHOLD`] (docs/vision-record.md, "The network for busy
-/// scenes at the scale it sees paint").
+/// scenes trained longer").
 pub const DEFAULT_BUSY_THRESHOLD: f32 = 0.4;
 
 /// The network's input side over the image's, unless set otherwise. The
