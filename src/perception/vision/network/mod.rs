@@ -48,7 +48,7 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// 0.4 (`models/history.md`, "The busy network seen four ways"). Looking
 /// once, the shipped busy network counts about as many at 0.4 as at
 /// [`DEFAULT_THRESHOLD`] (docs/vision-record.md, "The network for busy
-/// scenes trained longer").
+/// scenes averaged with its continuations").
 pub const DEFAULT_BUSY_THRESHOLD: f32 = 0.4;
 
 /// The network's input side over the image's, unless set otherwise. The
