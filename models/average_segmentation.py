@@ -5,7 +5,9 @@ Networks fine-tuned from one another lie close enough in weight space that
 their average is a network too, and often a better one than any of them
 (models/README.md says which shipped networks were made so). The networks
 must have the same layers; train_segmentation.py writes them as
-NAME_float.onnx. Run from the project's root, e.g.
+NAME_float.onnx. One may be 8-bit (a shipped network whose float weights
+were not kept): its weights are dequantized; the graph is the first float
+one's. Run from the project's root, e.g.
     .venv-train/bin/python models/average_segmentation.py A_float.onnx B_float.onnx \
         --out models/cable_segmentation.onnx
 It writes the float average beside OUT, as OUT_STEM_float.onnx, and the
@@ -21,32 +23,42 @@ from pathlib import Path
 import onnx
 from onnx import numpy_helper
 
-from quantize_segmentation import quantize
+from quantize_segmentation import conv_weights, quantize
 
 
 def average(paths: list[Path]) -> onnx.ModelProto:
-    """The first model with each float weight replaced by the mean of that
-    weight over all the models."""
+    """The first float model with each convolution's weights and bias
+    replaced by their mean over all the models (an 8-bit one's
+    dequantized: `conv_weights`), matched by the convolution's name."""
     models = [onnx.load(str(p)) for p in paths]
-    weights = [{w.name: numpy_helper.to_array(w) for w in m.graph.initializer} for m in models]
-    out = models[0]
-    for w in out.graph.initializer:
-        values = []
-        for path, named in zip(paths, weights):
-            if w.name not in named or named[w.name].shape != weights[0][w.name].shape:
-                raise ValueError(f"{path}: no weight {w.name} of shape {weights[0][w.name].shape}: "
-                                 f"not the same layers as {paths[0]}")
-            values.append(named[w.name])
-        if values[0].dtype.kind == "f":
+    floats = [m for m in models if not any(n.op_type == "DequantizeLinear" for n in m.graph.node)]
+    if not floats:
+        raise ValueError("give at least one float network: its graph is the average's")
+    out = floats[0]
+    weights = [conv_weights(p) for p in paths]
+    first = weights[models.index(out)]
+    initializers = {w.name: w for w in out.graph.initializer}
+    for node in out.graph.node:
+        if node.op_type != "Conv":
+            continue
+        for k, tensor in enumerate(node.input[1:]):
+            values = []
+            for path, named in zip(paths, weights):
+                own = named.get(node.name, (None, None))[k]
+                if own is None or own.shape != first[node.name][k].shape:
+                    raise ValueError(f"{path}: no convolution {node.name} of the same shape: "
+                                     f"not the same layers as the first float network")
+                values.append(own)
             mean = sum(v.astype("float64") for v in values) / len(values)
-            w.CopyFrom(numpy_helper.from_array(mean.astype(values[0].dtype), w.name))
+            dtype = numpy_helper.to_array(initializers[tensor]).dtype
+            initializers[tensor].CopyFrom(numpy_helper.from_array(mean.astype(dtype), tensor))
     return out
 
 
 def main() -> int:
     here = Path(__file__).resolve().parent
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("models", type=Path, nargs="+", help="float ONNX networks with the same layers")
+    parser.add_argument("models", type=Path, nargs="+", help="ONNX networks with the same layers, one of them float at least")
     parser.add_argument("--data", type=Path, default=here.parent.parent / "shared" / "data" / "cables-dev",
                         help="the cables-dev folder, for quantization's calibration "
                              "(default: ../shared/data/cables-dev from the project's root)")

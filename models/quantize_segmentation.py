@@ -37,6 +37,28 @@ CALIBRATION_IDS = range(0, 30)
 CALIBRATION_SIZES = ((240, 176), (320, 240))
 
 
+def conv_weights(path: Path) -> dict[str, tuple[np.ndarray, np.ndarray | None]]:
+    """Each convolution's float weights and bias (None where it has none),
+    by its node's name, which the export takes from the module's path and
+    quantization keeps. An 8-bit model's are dequantized, `(q - zero
+    point) * scale` per channel, so that a network whose float weights
+    were not kept can still be averaged and trained on."""
+    import onnx
+    from onnx import numpy_helper
+
+    graph = onnx.load(str(path)).graph
+    tensors = {i.name: numpy_helper.to_array(i) for i in graph.initializer}
+    for node in graph.node:
+        if node.op_type == "DequantizeLinear" and all(i in tensors for i in node.input):
+            q, scale, zero = (tensors[i] for i in node.input)
+            axis = next((a.i for a in node.attribute if a.name == "axis"), 1)
+            shape = [-1 if k == axis else 1 for k in range(q.ndim)] if scale.ndim else []
+            tensors[node.output[0]] = ((q.astype(np.float32) - np.reshape(zero, shape).astype(np.float32))
+                                       * np.reshape(scale, shape))
+    return {n.name: (tensors[n.input[1]], tensors[n.input[2]] if len(n.input) > 2 else None)
+            for n in graph.node if n.op_type == "Conv"}
+
+
 def bytes_in(path: Path) -> None:
     """Rewrites the 8-bit model at `path` to take the image's bytes (uint8,
     NHWC) in place of float32 0..255. Between its input and the first

@@ -54,7 +54,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from quantize_segmentation import quantize
+from quantize_segmentation import conv_weights, quantize
 
 # The camera's size and the size the network runs at.
 FULL_W, FULL_H = 640, 480
@@ -482,36 +482,28 @@ class BatchStream(torch.utils.data.IterableDataset):
 
 
 def load_onnx_weights(model: CableNet, path: Path) -> None:
-    """Starts `model` from an exported float model's weights, to fine-tune
-    it on new data rather than train from nothing. The export folds each
-    batch norm into its convolution, so the convolutions take the folded
+    """Starts `model` from an exported model's weights, to fine-tune it on
+    new data rather than train from nothing. The export folds each batch
+    norm into its convolution, so the convolutions take the folded
     weights and biases (given as the batch norms' shifts) and the batch
     norms become identities, to be kept frozen (`freeze_batch_norms`).
-    ONNX's Conv nodes come in the order the forward pass runs them."""
-    import onnx
-    from onnx import numpy_helper
-
-    graph = onnx.load(str(path)).graph
-    weights = {i.name: numpy_helper.to_array(i) for i in graph.initializer}
-    order: list[nn.Conv2d] = []
-    hooks = [m.register_forward_hook(lambda m, i, o: order.append(m)) for m in model.modules()
-             if isinstance(m, nn.Conv2d)]
-    model.eval()
-    with torch.no_grad():
-        model.logits(torch.zeros(1, 3, 32, 32))
-    for h in hooks:
-        h.remove()
-    convs = [n for n in graph.node if n.op_type == "Conv"]
-    if len(convs) != len(order):
-        raise ValueError(f"{path}: {len(convs)} convolutions, the network has {len(order)}")
+    An 8-bit model's weights are dequantized (`conv_weights`)."""
+    weights = conv_weights(path)
+    convs = [(name, m) for name, m in model.named_modules() if isinstance(m, nn.Conv2d)]
+    if len(weights) != len(convs):
+        raise ValueError(f"{path}: {len(weights)} convolutions, the network has {len(convs)}")
     batch_norm_after = {seq[0]: seq[1] for seq in model.modules()
                         if isinstance(seq, ConvBnAct)}
     with torch.no_grad():
-        for node, conv in zip(convs, order):
-            w = torch.from_numpy(weights[node.input[1]].copy())
-            b = torch.from_numpy(weights[node.input[2]].copy()) if len(node.input) > 2 else None
+        for module_path, conv in convs:
+            parts = module_path.split(".")
+            name = "".join("/" + ".".join(parts[:k]) for k in range(1, len(parts) + 1)) + "/Conv"
+            if name not in weights:
+                raise ValueError(f"{path}: no convolution {name}")
+            w = torch.from_numpy(weights[name][0].copy())
+            b = torch.from_numpy(weights[name][1].copy()) if weights[name][1] is not None else None
             if w.shape != conv.weight.shape:
-                raise ValueError(f"{path}: convolution {node.name} is {tuple(w.shape)}, "
+                raise ValueError(f"{path}: convolution {name} is {tuple(w.shape)}, "
                                  f"the network's {tuple(conv.weight.shape)}")
             conv.weight.copy_(w)
             bn = batch_norm_after.get(conv)
@@ -761,7 +753,7 @@ def main() -> int:
     parser.add_argument("--checkpoint-every", type=int, default=200,
                         help="steps between checkpoints (OUT_STEM.checkpoint.pt beside the model)")
     parser.add_argument("--init", type=Path,
-                        help="fine-tune this float ONNX model (e.g. models/cable_segmentation_float.onnx) "
+                        help="fine-tune this ONNX model (e.g. models/cable_segmentation_float.onnx; an 8-bit one is dequantized) "
                              "instead of training from nothing")
     parser.add_argument("--from-half", action="store_true",
                         help="leave out the network's first scale: the first convolution strides to half size "
