@@ -46,9 +46,9 @@ pub const DEFAULT_THRESHOLD: f32 = 0.5;
 /// ([`BUSY_MODEL`]): the mean of its four looks is a smoother map than one
 /// look's, and on real cables over paint it counts most right when cut at
 /// 0.4 (`models/history.md`, "The busy network seen four ways"). Looking
-/// once, the shipped busy network counts about as many at 0.4 as at
+/// once, the shipped busy network counts a few more at 0.4 than at
 /// [`DEFAULT_THRESHOLD`] (docs/vision-record.md, "The network for busy
-/// scenes averaged with its continuations").
+/// scenes averaged with two runs from its 8-bit weights").
 pub const DEFAULT_BUSY_THRESHOLD: f32 = 0.4;
 
 /// The network's input side over the image's, unless set otherwise. The
