@@ -31,12 +31,11 @@ def average(paths: list[Path]) -> onnx.ModelProto:
     replaced by their mean over all the models (an 8-bit one's
     dequantized: `conv_weights`), matched by the convolution's name."""
     models = [onnx.load(str(p)) for p in paths]
-    floats = [m for m in models if not any(n.op_type == "DequantizeLinear" for n in m.graph.node)]
+    floats = [i for i, m in enumerate(models) if not any(n.op_type == "DequantizeLinear" for n in m.graph.node)]
     if not floats:
         raise ValueError("give at least one float network: its graph is the average's")
-    out = floats[0]
-    weights = [conv_weights(p) for p in paths]
-    first = weights[models.index(out)]
+    weights = [conv_weights(m) for m in models]
+    out, first = models[floats[0]], weights[floats[0]]
     initializers = {w.name: w for w in out.graph.initializer}
     for node in out.graph.node:
         if node.op_type != "Conv":

@@ -37,16 +37,15 @@ CALIBRATION_IDS = range(0, 30)
 CALIBRATION_SIZES = ((240, 176), (320, 240))
 
 
-def conv_weights(path: Path) -> dict[str, tuple[np.ndarray, np.ndarray | None]]:
-    """Each convolution's float weights and bias (None where it has none),
-    by its node's name, which the export takes from the module's path and
-    quantization keeps. An 8-bit model's are dequantized, `(q - zero
-    point) * scale` per channel, so that a network whose float weights
-    were not kept can still be averaged and trained on."""
-    import onnx
+def conv_weights(model) -> dict[str, tuple[np.ndarray, np.ndarray | None]]:
+    """Each convolution's float weights and bias (None where it has none)
+    in a loaded ONNX model, by its node's name, which the export takes from
+    the module's path and quantization keeps. An 8-bit model's are
+    dequantized, `(q - zero point) * scale` per channel, so that a network
+    whose float weights were not kept can still be averaged and trained on."""
     from onnx import numpy_helper
 
-    graph = onnx.load(str(path)).graph
+    graph = model.graph
     tensors = {i.name: numpy_helper.to_array(i) for i in graph.initializer}
     for node in graph.node:
         if node.op_type == "DequantizeLinear" and all(i in tensors for i in node.input):

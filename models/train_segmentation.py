@@ -488,7 +488,9 @@ def load_onnx_weights(model: CableNet, path: Path) -> None:
     weights and biases (given as the batch norms' shifts) and the batch
     norms become identities, to be kept frozen (`freeze_batch_norms`).
     An 8-bit model's weights are dequantized (`conv_weights`)."""
-    weights = conv_weights(path)
+    import onnx
+
+    weights = conv_weights(onnx.load(str(path)))
     convs = [(name, m) for name, m in model.named_modules() if isinstance(m, nn.Conv2d)]
     if len(weights) != len(convs):
         raise ValueError(f"{path}: {len(weights)} convolutions, the network has {len(convs)}")
