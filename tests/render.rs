@@ -10,8 +10,8 @@ use cablecell::perception::vision::calibration::{
 };
 use cablecell::perception::vision::paths::polyline_length;
 use cablecell::sim::render::{
-    Appearance, Background, BackgroundChoice, CableSpec, Light, RenderedScene, SceneOptions,
-    SceneSpec, random_scene, render, render_world, write_dataset,
+    Appearance, Background, BackgroundChoice, CableSpec, Cables, Light, RenderedScene,
+    SceneOptions, SceneSpec, random_scene, render, render_world, write_dataset,
 };
 use cablecell::sim::world::SimWorld;
 use cablecell::sim::world::WorldConfig;
@@ -384,7 +384,7 @@ fn a_data_set_has_the_cables_dev_layout() {
         ..SceneOptions::default()
     };
     let mut ticks = 0;
-    write_dataset(dir.path(), 3, 11, &options, &[], || ticks += 1).unwrap();
+    write_dataset(dir.path(), 3, 11, &options, Cables::Rendered, || ticks += 1).unwrap();
     assert_eq!(ticks, 3);
     let mut expected = Vec::new();
     for i in 0..3 {
@@ -421,7 +421,7 @@ fn a_data_set_has_the_cables_dev_layout() {
 
     // Image i does not depend on how many are written.
     let again = tempfile::tempdir().unwrap();
-    write_dataset(again.path(), 2, 11, &options, &[], || {}).unwrap();
+    write_dataset(again.path(), 2, 11, &options, Cables::Rendered, || {}).unwrap();
     for name in ["00001.txt", "00001_mask_all.png"] {
         assert_eq!(
             std::fs::read(dir.path().join(name)).unwrap(),

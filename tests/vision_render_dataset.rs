@@ -201,8 +201,61 @@ fn another_folders_cables_lie_over_rendered_backgrounds_with_their_labels() {
     );
     assert!(!out.join("00003.jpg").exists());
 
+    // With shadows: the same scenes and labels, the background darker
+    // just beside the cables and as it was far from them.
+    let shadowed = dir.path().join("shadowed");
+    let run = render(&shadowed, &[&pasted[..], &["--cast-shadows"]].concat());
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let (mut near, mut far) = ([0.0; 2], [0.0; 2]);
+    for index in 0..3 {
+        let stem = format!("{index:05}");
+        for name in [format!("{stem}.txt"), format!("{stem}_mask_0.png")] {
+            assert_eq!(
+                std::fs::read(out.join(&name)).expect("unshadowed"),
+                std::fs::read(shadowed.join(&name)).expect("shadowed"),
+                "{name}"
+            );
+        }
+        let union = read(
+            &out.join(format!("{stem}_mask_all.png")),
+            imgcodecs::IMREAD_GRAYSCALE,
+        );
+        let ring = |from_px: i32, to_px: i32| {
+            let grown = |by_px: i32| {
+                let mut grown = Mat::default();
+                let kernel = opencv::imgproc::get_structuring_element_def(
+                    opencv::imgproc::MORPH_ELLIPSE,
+                    core::Size::new(2 * by_px + 1, 2 * by_px + 1),
+                )
+                .expect("kernel");
+                opencv::imgproc::dilate_def(&union, &mut grown, &kernel).expect("dilate");
+                grown
+            };
+            let mut ring = Mat::default();
+            core::subtract_def(&grown(to_px), &grown(from_px), &mut ring).expect("ring");
+            ring
+        };
+        let mut beyond = Mat::default();
+        core::bitwise_not_def(&ring(0, 24), &mut beyond).expect("beyond");
+        core::subtract_def(&beyond.clone(), &union, &mut beyond).expect("beyond");
+        for (k, folder) in [&out, &shadowed].into_iter().enumerate() {
+            let gray = read(
+                &folder.join(format!("{stem}.jpg")),
+                imgcodecs::IMREAD_GRAYSCALE,
+            );
+            near[k] += core::mean(&gray, &ring(2, 6)).expect("mean")[0];
+            far[k] += core::mean(&gray, &beyond).expect("mean")[0];
+        }
+    }
+    assert!(near[1] < near[0] - 5.0, "near the cables: {near:?}");
+    assert!((far[1] - far[0]).abs() < 0.5, "far from them: {far:?}");
+
     // Refused: a folder with no labelled images, rendered cables' options
-    // beside it, and a photograph range without it.
+    // beside it, and a photograph range or shadows without it.
     let missing = dir.path().join("no-such-folder");
     let run = render(&dir.path().join("a"), &["--cables-from", text(&missing)]);
     assert_eq!(run.status.code(), Some(2));
@@ -214,7 +267,9 @@ fn another_folders_cables_lie_over_rendered_backgrounds_with_their_labels() {
     assert_eq!(run.status.code(), Some(2));
     let run = render(&dir.path().join("c"), &["--from", "00001"]);
     assert_eq!(run.status.code(), Some(2));
-    for name in ["a", "b", "c"] {
+    let run = render(&dir.path().join("d"), &["--cast-shadows"]);
+    assert_eq!(run.status.code(), Some(2));
+    for name in ["a", "b", "c", "d"] {
         assert!(!dir.path().join(name).exists(), "{name}");
     }
 }

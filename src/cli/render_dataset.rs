@@ -7,7 +7,9 @@
 use crate::cli::output::outln;
 use std::path::{Path, PathBuf};
 
-use cablecell::sim::render::{BackgroundChoice, LabelledPhotograph, SceneOptions, write_dataset};
+use cablecell::sim::render::{
+    BackgroundChoice, Cables, LabelledPhotograph, SceneOptions, write_dataset,
+};
 use clap::Args;
 
 use super::labelled_folder::{LabelledImage, load_labelled};
@@ -64,6 +66,11 @@ pub struct RenderDatasetArgs {
     /// this, e.g. 00044.
     #[arg(long, requires = "cables_from")]
     pub to: Option<String>,
+    /// With --cables-from: the pasted cables cast their shadows on the
+    /// background, as rendered cables do, under the background's light.
+    /// Off by default, so that a set rendered before renders the same.
+    #[arg(long, requires = "cables_from")]
+    pub cast_shadows: bool,
 }
 
 /// 1 to 100 000 images: a training set of a few thousand is plenty.
@@ -135,7 +142,14 @@ pub fn render_dataset(args: &RenderDatasetArgs) -> Status {
         })
         .collect();
     let bar = progress::bar(args.count, "images");
-    let written = write_dataset(&args.out, args.count, args.seed, &options, &photos, || {
+    let cables = match &args.cables_from {
+        Some(_) => Cables::Pasted {
+            photos: &photos,
+            cast_shadows: args.cast_shadows,
+        },
+        None => Cables::Rendered,
+    };
+    let written = write_dataset(&args.out, args.count, args.seed, &options, cables, || {
         bar.inc(1)
     });
     bar.finish_and_clear();

@@ -617,7 +617,15 @@ mod tests {
             "{empty}"
         );
         let options = SceneOptions::default();
-        crate::sim::render::write_dataset(dir.path(), 2, 1, &options, &[], || {}).unwrap();
+        crate::sim::render::write_dataset(
+            dir.path(),
+            2,
+            1,
+            &options,
+            crate::sim::render::Cables::Rendered,
+            || {},
+        )
+        .unwrap();
         let set = photographs(dir.path()).unwrap();
         let names: Vec<&str> = set.images.iter().map(|i| i.name.as_str()).collect();
         assert_eq!(names, ["00000", "00001"]);

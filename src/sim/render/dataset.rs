@@ -22,21 +22,33 @@ const JPEG_QUALITY: i32 = 92;
 /// spline control points in cables-dev rather than every pixel.
 const POLYLINE_SPACING_PX: f64 = 6.0;
 
+/// Where a data set's cables come from.
+#[derive(Clone, Copy)]
+pub enum Cables<'a> {
+    /// Drawn as shaded tubes ([`dataset_scene`]).
+    Rendered,
+    /// Cut out of labelled photographs, image i holding photograph i's
+    /// (modulo their number) over a background ([`pasted_scene`]); with
+    /// `cast_shadows`, the cables cast their shadows on it.
+    Pasted {
+        photos: &'a [LabelledPhotograph<'a>],
+        cast_shadows: bool,
+    },
+}
+
 /// Writes `count` random scenes into `dir` in the cables-dev layout: per
 /// image `NNNNN.jpg`, `NNNNN_mask_K.png` (0/255, one per cable, K from 0),
 /// `NNNNN_mask_all.png` and `NNNNN.txt` (line K: `N x0 y0 x1 y1 ...`, the
 /// K-th cable's centre line, integer pixels as in cables-dev). Image i is
 /// drawn from stream i of a generator seeded with `seed`, so it does not
-/// depend on `count`. With `photos`, image i holds photograph i (modulo
-/// their number)'s cables over a background ([`pasted_scene`]) in place
-/// of rendered ones. `written` is called after each image (a progress
+/// depend on `count`. `written` is called after each image (a progress
 /// bar's tick).
 pub fn write_dataset(
     dir: &Path,
     count: usize,
     seed: u64,
     options: &SceneOptions,
-    photos: &[LabelledPhotograph],
+    cables: Cables,
     mut written: impl FnMut(),
 ) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|source| RenderError::Io {
@@ -44,10 +56,18 @@ pub fn write_dataset(
         source,
     })?;
     for index in 0..count {
-        let rendered = if photos.is_empty() {
-            dataset_scene(seed, index as u64, options)?
-        } else {
-            pasted_scene(seed, index as u64, options, &photos[index % photos.len()])?
+        let rendered = match cables {
+            Cables::Pasted {
+                photos,
+                cast_shadows,
+            } if !photos.is_empty() => pasted_scene(
+                seed,
+                index as u64,
+                options,
+                &photos[index % photos.len()],
+                cast_shadows,
+            )?,
+            _ => dataset_scene(seed, index as u64, options)?,
         };
         write_scene_files(dir, &format!("{index:05}"), &rendered)?;
         written();
@@ -70,12 +90,15 @@ pub fn dataset_scene(
 /// Image `index` of a data set of `photo`'s cables over rendered
 /// backgrounds: the background [`dataset_scene`] draws for `options` less
 /// its cables, the photograph laid over it in a placement drawn from the
-/// same stream ([`Placement::random`]).
+/// same stream ([`Placement::random`]). With `cast_shadows`, the cables
+/// cast their shadows under the background's light, which draws nothing
+/// more from the stream: the same scene, shadows added.
 pub fn pasted_scene(
     seed: u64,
     index: u64,
     options: &SceneOptions,
     photo: &LabelledPhotograph,
+    cast_shadows: bool,
 ) -> Result<RenderedScene, RenderError> {
     let mut rng = stream(seed, index);
     let no_cables = SceneOptions {
@@ -83,9 +106,11 @@ pub fn pasted_scene(
         max_cables: 0,
         ..options.clone()
     };
-    let background = render(&random_scene(&mut rng, &no_cables), &mut rng)?;
+    let spec = random_scene(&mut rng, &no_cables);
+    let background = render(&spec, &mut rng)?;
     let placement = Placement::random(&mut rng, options.width_px, options.height_px);
-    paste_cables(&background.bgr, photo, &placement)
+    let shadow_light = cast_shadows.then_some(&spec.light);
+    paste_cables(&background.bgr, photo, &placement, shadow_light)
 }
 
 /// Stream `index` of a generator seeded with `seed`: image `index`'s draws.

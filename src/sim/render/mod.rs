@@ -36,7 +36,7 @@ use opencv::imgproc;
 use opencv::prelude::*;
 use rand::{Rng, RngExt};
 
-pub use dataset::{dataset_scene, pasted_scene, write_dataset, write_scene_files};
+pub use dataset::{Cables, dataset_scene, pasted_scene, write_dataset, write_scene_files};
 pub use occluder::{Board, OccluderSpec, Occlusion};
 pub use pasted::LabelledPhotograph;
 pub use random::{BackgroundChoice, SceneOptions, random_scene};

@@ -10,7 +10,8 @@ use opencv::prelude::*;
 use rand::{Rng, RngExt};
 
 use super::random::MIN_IN_VIEW_DIAGONALS;
-use super::{RenderError, RenderedScene, cv, stretches_in_image, unite};
+use super::tube::{SHADOW_SOFTNESS_RADII, shadow_shift_px};
+use super::{Light, RenderError, RenderedScene, cv, stretches_in_image, unite};
 use crate::perception::vision::eval::distance_to_polylines;
 use crate::perception::vision::paths::polyline_length;
 
@@ -84,11 +85,13 @@ impl Placement {
 /// labels moved with them. A cable that leaves the enlarged view and comes
 /// back shows the camera one cable a stretch in view, so each stretch is
 /// labelled as one. A stretch with less in view than a rendered cable may
-/// have is not laid over it.
+/// have is not laid over it. With `shadow_light`, the cables cast their
+/// shadows on the background under that light ([`cast_shadows`]).
 pub fn paste_cables(
     background: &Mat,
     photo: &LabelledPhotograph,
     placement: &Placement,
+    shadow_light: Option<&Light>,
 ) -> Result<RenderedScene, RenderError> {
     let to = background
         .size()
@@ -139,6 +142,14 @@ pub fn paste_cables(
         }
     }
     let union_mask = unite(&masks, to.width, to.height)?;
+    let shadowed;
+    let background = match shadow_light {
+        Some(light) => {
+            shadowed = cast_shadows(background, &masks, light)?;
+            &shadowed
+        }
+        None => background,
+    };
     let bgr = blend(
         background,
         &warp(photo.bgr, imgproc::INTER_LINEAR)?,
@@ -227,6 +238,111 @@ fn touch(a: &Mat, b: &Mat) -> Result<bool, RenderError> {
     Ok(core::count_non_zero(&shared).map_err(cv("count shared pixels"))? > 0)
 }
 
+/// `background` (CV_8UC3) darkened where the cables of `masks` (CV_8UC1
+/// 0/255) cast their shadows under `light`: each shifted away from the
+/// light and softened as a rendered tube's is ([`super::tube`]), by its
+/// radius as its mask gives it. A photograph's cut-out leaves its own
+/// shadows behind on the photograph's table; without these, pasted
+/// cables would be the only ones a network sees that cast none.
+fn cast_shadows(background: &Mat, masks: &[Mat], light: &Light) -> Result<Mat, RenderError> {
+    let size = background
+        .size()
+        .map_err(cv("read the background's size"))?;
+    let Some(shift_per_radius) = shadow_shift_px(light, 1.0) else {
+        return Ok(background.clone());
+    };
+    let mut darkest = Mat::zeros_size(size, core::CV_32F)
+        .and_then(|m| m.to_mat())
+        .map_err(cv("allocate the shadows"))?;
+    for mask in masks {
+        let in_mask = core::count_non_zero(mask).map_err(cv("count a cable's pixels"))?;
+        if in_mask == 0 {
+            continue;
+        }
+        // Across a band w pixels wide, a pixel's distance to the nearest
+        // pixel outside it averages w/4 + 1/2.
+        let mut inside = Mat::default();
+        imgproc::distance_transform(
+            mask,
+            &mut inside,
+            imgproc::DIST_L2,
+            imgproc::DIST_MASK_3,
+            core::CV_32F,
+        )
+        .map_err(cv("measure a cable's width"))?;
+        let mean_px =
+            core::sum_elems(&inside).map_err(cv("sum a cable's widths"))?[0] / f64::from(in_mask);
+        let radius_px = 2.0 * (mean_px - 0.5);
+        let [sx, sy] = shift_per_radius.map(|s| s * radius_px);
+        // Each pixel's distance to the cable, read where its shadow is cast from.
+        let mut outside_mask = Mat::default();
+        core::bitwise_not(mask, &mut outside_mask, &core::no_array())
+            .map_err(cv("invert a cable's mask"))?;
+        let mut outside = Mat::default();
+        imgproc::distance_transform(
+            &outside_mask,
+            &mut outside,
+            imgproc::DIST_L2,
+            imgproc::DIST_MASK_3,
+            core::CV_32F,
+        )
+        .map_err(cv("measure the distance to a cable"))?;
+        let shift = Mat::from_slice_2d(&[[1.0, 0.0, -sx], [0.0, 1.0, -sy]])
+            .map_err(cv("build a shadow's shift"))?;
+        let mut from_caster = Mat::default();
+        imgproc::warp_affine(
+            &outside,
+            &mut from_caster,
+            &shift,
+            size,
+            imgproc::INTER_LINEAR,
+            core::BORDER_REPLICATE,
+            Scalar::all(0.0),
+        )
+        .map_err(cv("shift a shadow"))?;
+        // 1 under the cable (and above, clamped below), falling to 0 over
+        // its softness beyond its edge, half a pixel short of the pixel
+        // centres the distance runs to (and below 0 further out, where the
+        // running maximum drops it).
+        let softness_px = SHADOW_SOFTNESS_RADII * radius_px;
+        let mut shade = Mat::default();
+        from_caster
+            .convert_to(
+                &mut shade,
+                core::CV_32F,
+                -1.0 / softness_px,
+                1.0 + 0.5 / softness_px,
+            )
+            .map_err(cv("soften a shadow"))?;
+        let mut darker = Mat::default();
+        core::max(&darkest, &shade, &mut darker).map_err(cv("add a shadow"))?;
+        darkest = darker;
+    }
+    // What is left of the light: 1 − shadow × shade, shade at most 1.
+    let mut clamped = Mat::default();
+    imgproc::threshold(&darkest, &mut clamped, 1.0, 1.0, imgproc::THRESH_TRUNC)
+        .map_err(cv("clamp the shadows"))?;
+    let mut light_left = Mat::default();
+    clamped
+        .convert_to(&mut light_left, core::CV_32F, -light.shadow, 1.0)
+        .map_err(cv("darken by the shadows"))?;
+    let mut light_left3 = Mat::default();
+    imgproc::cvt_color_def(&light_left, &mut light_left3, imgproc::COLOR_GRAY2BGR)
+        .map_err(cv("spread the shadows"))?;
+    let mut back = Mat::default();
+    background
+        .convert_to(&mut back, core::CV_32FC3, 1.0, 0.0)
+        .map_err(cv("convert the background to floats"))?;
+    let mut darkened = Mat::default();
+    core::multiply(&back, &light_left3, &mut darkened, 1.0, -1)
+        .map_err(cv("darken the background"))?;
+    let mut out = Mat::default();
+    darkened
+        .convert_to(&mut out, core::CV_8UC3, 1.0, 0.0)
+        .map_err(cv("round the shadowed background"))?;
+    Ok(out)
+}
+
 /// `front` where `mask` is set and `back` elsewhere, the mask's edge
 /// blurred so that the cut shows no seam a network could learn.
 fn blend(back: &Mat, front: &Mat, mask: &Mat) -> Result<Mat, RenderError> {
@@ -303,13 +419,59 @@ mod tests {
         lines: &[Vec<[f64; 2]>],
         placement: &Placement,
     ) -> RenderedScene {
+        over_grey_lit(bgr, masks, lines, placement, None)
+    }
+
+    /// As [`over_grey`], the cables casting their shadows under
+    /// `shadow_light` where given.
+    fn over_grey_lit(
+        bgr: &Mat,
+        masks: &[Mat],
+        lines: &[Vec<[f64; 2]>],
+        placement: &Placement,
+        shadow_light: Option<&Light>,
+    ) -> RenderedScene {
         let photo = LabelledPhotograph {
             bgr,
             masks,
             centerlines_px: lines,
         };
         let background = filled(bgr.rows(), bgr.cols(), CV_8UC3, 100.0);
-        paste_cables(&background, &photo, placement).unwrap()
+        paste_cables(&background, &photo, placement, shadow_light).unwrap()
+    }
+
+    #[test]
+    fn a_pasted_cable_casts_its_shadow_away_from_the_light() {
+        let (bgr, masks, lines) = photograph();
+        let placement = Placement {
+            mirror_x: false,
+            mirror_y: false,
+            scale: 1.0,
+            centre_px: [0.0, 0.0],
+        };
+        // Light from the top of the image, halving what the cable shades.
+        let light = Light {
+            toward_light: [0.0, -0.6, 0.8],
+            shadow: 0.5,
+            ..Light::default()
+        };
+        let scene = over_grey_lit(&bgr, &masks, &lines, &placement, Some(&light));
+        let gray = |x: i32, y: i32| scene.bgr.at_2d::<Vec3b>(y, x).unwrap()[0];
+        // The cable (rows 21–27) as it was; its shadow just below it, at
+        // half the light where the cable shades it whole; nothing above
+        // it or beyond its end.
+        assert_eq!(gray(20, 24), 255);
+        assert_eq!(gray(20, 29), 50);
+        assert!(gray(20, 31) > 50 && gray(20, 31) < 100, "{}", gray(20, 31));
+        assert_eq!(gray(20, 34), 100);
+        assert_eq!(gray(20, 18), 100);
+        assert_eq!(gray(55, 29), 100);
+        // The labels do not move.
+        let unlit = over_grey(&bgr, &masks, &lines, &placement);
+        assert_eq!(
+            scene.masks[0].data_bytes().unwrap(),
+            unlit.masks[0].data_bytes().unwrap()
+        );
     }
 
     #[test]

@@ -17,13 +17,26 @@ const SHININESS: i32 = 24;
 /// The shadow lies this many radii away from the light, and fades out
 /// over this many radii beyond the cable's own width.
 const SHADOW_SHIFT_RADII: f64 = 0.7;
-const SHADOW_SOFTNESS_RADII: f64 = 0.8;
+pub(super) const SHADOW_SOFTNESS_RADII: f64 = 0.8;
 /// Pixels the anti-aliased edge spreads over beyond the radius.
 const EDGE_PX: f64 = 0.5;
 /// Bare metal at a cable's ends: tinned copper or a steel ferrule, silver
 /// and glossier than any insulation.
 const METAL_BGR: [f64; 3] = [175.0, 178.0, 182.0];
 const METAL_GLOSS: f64 = 0.9;
+
+/// Where the shadow of a cable of `radius` under `light` is cast from: the
+/// shadow at pixel p is that of the cable at p plus this shift, towards
+/// the light. None where the light casts no shadow.
+pub(super) fn shadow_shift_px(light: &Light, radius: f64) -> Option<[f64; 2]> {
+    let light_xy = light.toward_light[0].hypot(light.toward_light[1]);
+    if light.shadow > 0.0 && light_xy > 1e-9 {
+        let shift = SHADOW_SHIFT_RADII * radius / light_xy;
+        Some([light.toward_light[0] * shift, light.toward_light[1] * shift])
+    } else {
+        None
+    }
+}
 
 /// Each pixel's nearest point on the centre line, over a box of the image.
 struct Field {
@@ -63,13 +76,7 @@ pub(super) fn draw(
     light: &Light,
 ) {
     let radius = cable.diameter_px / 2.0;
-    let light_xy = light.toward_light[0].hypot(light.toward_light[1]);
-    let shadow_shift = if light.shadow > 0.0 && light_xy > 1e-9 {
-        let shift = SHADOW_SHIFT_RADII * radius / light_xy;
-        Some([light.toward_light[0] * shift, light.toward_light[1] * shift])
-    } else {
-        None
-    };
+    let shadow_shift = shadow_shift_px(light, radius);
     let reach = radius
         + EDGE_PX
         + 1.0
