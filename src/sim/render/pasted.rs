@@ -261,15 +261,7 @@ fn cast_shadows(background: &Mat, masks: &[Mat], light: &Light) -> Result<Mat, R
         }
         // Across a band w pixels wide, a pixel's distance to the nearest
         // pixel outside it averages w/4 + 1/2.
-        let mut inside = Mat::default();
-        imgproc::distance_transform(
-            mask,
-            &mut inside,
-            imgproc::DIST_L2,
-            imgproc::DIST_MASK_3,
-            core::CV_32F,
-        )
-        .map_err(cv("measure a cable's width"))?;
+        let inside = distance_to_zero(mask)?;
         let mean_px =
             core::sum_elems(&inside).map_err(cv("sum a cable's widths"))?[0] / f64::from(in_mask);
         let radius_px = 2.0 * (mean_px - 0.5);
@@ -278,15 +270,7 @@ fn cast_shadows(background: &Mat, masks: &[Mat], light: &Light) -> Result<Mat, R
         let mut outside_mask = Mat::default();
         core::bitwise_not(mask, &mut outside_mask, &core::no_array())
             .map_err(cv("invert a cable's mask"))?;
-        let mut outside = Mat::default();
-        imgproc::distance_transform(
-            &outside_mask,
-            &mut outside,
-            imgproc::DIST_L2,
-            imgproc::DIST_MASK_3,
-            core::CV_32F,
-        )
-        .map_err(cv("measure the distance to a cable"))?;
+        let outside = distance_to_zero(&outside_mask)?;
         let shift = Mat::from_slice_2d(&[[1.0, 0.0, -sx], [0.0, 1.0, -sy]])
             .map_err(cv("build a shadow's shift"))?;
         let mut from_caster = Mat::default();
@@ -326,21 +310,16 @@ fn cast_shadows(background: &Mat, masks: &[Mat], light: &Light) -> Result<Mat, R
     clamped
         .convert_to(&mut light_left, core::CV_32F, -light.shadow, 1.0)
         .map_err(cv("darken by the shadows"))?;
-    let mut light_left3 = Mat::default();
-    imgproc::cvt_color_def(&light_left, &mut light_left3, imgproc::COLOR_GRAY2BGR)
-        .map_err(cv("spread the shadows"))?;
-    let mut back = Mat::default();
-    background
-        .convert_to(&mut back, core::CV_32FC3, 1.0, 0.0)
-        .map_err(cv("convert the background to floats"))?;
     let mut darkened = Mat::default();
-    core::multiply(&back, &light_left3, &mut darkened, 1.0, -1)
-        .map_err(cv("darken the background"))?;
-    let mut out = Mat::default();
-    darkened
-        .convert_to(&mut out, core::CV_8UC3, 1.0, 0.0)
-        .map_err(cv("round the shadowed background"))?;
-    Ok(out)
+    core::multiply(
+        &converted(background, core::CV_32FC3)?,
+        &as_colour(&light_left)?,
+        &mut darkened,
+        1.0,
+        -1,
+    )
+    .map_err(cv("darken the background"))?;
+    converted(&darkened, core::CV_8UC3)
 }
 
 /// `front` where `mask` is set and `back` elsewhere, the mask's edge
@@ -352,17 +331,11 @@ fn blend(back: &Mat, front: &Mat, mask: &Mat) -> Result<Mat, RenderError> {
     let mut soft = Mat::default();
     imgproc::gaussian_blur_def(&alpha, &mut soft, Size::new(3, 3), 0.0)
         .map_err(cv("soften the paste's edge"))?;
-    let mut alpha3 = Mat::default();
-    imgproc::cvt_color_def(&soft, &mut alpha3, imgproc::COLOR_GRAY2BGR)
-        .map_err(cv("spread the paste's mask"))?;
-    let as_float = |image: &Mat| -> Result<Mat, RenderError> {
-        let mut out = Mat::default();
-        image
-            .convert_to(&mut out, core::CV_32FC3, 1.0, 0.0)
-            .map_err(cv("convert an image to floats"))?;
-        Ok(out)
-    };
-    let (back, front) = (as_float(back)?, as_float(front)?);
+    let alpha3 = as_colour(&soft)?;
+    let (back, front) = (
+        converted(back, core::CV_32FC3)?,
+        converted(front, core::CV_32FC3)?,
+    );
     // back + alpha · (front − back)
     let mut difference = Mat::default();
     core::subtract(&front, &back, &mut difference, &core::no_array(), -1)
@@ -372,10 +345,32 @@ fn blend(back: &Mat, front: &Mat, mask: &Mat) -> Result<Mat, RenderError> {
     let mut blended = Mat::default();
     core::add(&back, &weighted, &mut blended, &core::no_array(), -1)
         .map_err(cv("blend the paste"))?;
+    converted(&blended, core::CV_8UC3)
+}
+
+/// A BGR image converted to `typ`: CV_32FC3 to compute with, CV_8UC3
+/// (rounded) to write.
+fn converted(image: &Mat, typ: i32) -> Result<Mat, RenderError> {
     let mut out = Mat::default();
-    blended
-        .convert_to(&mut out, core::CV_8UC3, 1.0, 0.0)
-        .map_err(cv("round the blended image"))?;
+    image
+        .convert_to(&mut out, typ, 1.0, 0.0)
+        .map_err(cv("convert an image"))?;
+    Ok(out)
+}
+
+/// Each pixel's distance (CV_32F) to the nearest zero pixel of `mask`.
+fn distance_to_zero(mask: &Mat) -> Result<Mat, RenderError> {
+    let mut distance = Mat::default();
+    imgproc::distance_transform_def(mask, &mut distance, imgproc::DIST_L2, imgproc::DIST_MASK_3)
+        .map_err(cv("measure distances in a mask"))?;
+    Ok(distance)
+}
+
+/// A one-channel float factor (CV_32F) as three, to weigh a BGR image by.
+fn as_colour(factor: &Mat) -> Result<Mat, RenderError> {
+    let mut out = Mat::default();
+    imgproc::cvt_color_def(factor, &mut out, imgproc::COLOR_GRAY2BGR)
+        .map_err(cv("spread a factor over the colours"))?;
     Ok(out)
 }
 
@@ -440,15 +435,18 @@ mod tests {
         paste_cables(&background, &photo, placement, shadow_light).unwrap()
     }
 
+    /// The photograph laid over the background as it is.
+    const AS_IS: Placement = Placement {
+        mirror_x: false,
+        mirror_y: false,
+        scale: 1.0,
+        centre_px: [0.0, 0.0],
+    };
+
     #[test]
     fn a_pasted_cable_casts_its_shadow_away_from_the_light() {
         let (bgr, masks, lines) = photograph();
-        let placement = Placement {
-            mirror_x: false,
-            mirror_y: false,
-            scale: 1.0,
-            centre_px: [0.0, 0.0],
-        };
+        let placement = AS_IS;
         // Light from the top of the image, halving what the cable shades.
         let light = Light {
             toward_light: [0.0, -0.6, 0.8],
@@ -479,9 +477,7 @@ mod tests {
         let (bgr, masks, lines) = photograph();
         let placement = Placement {
             mirror_x: true,
-            mirror_y: false,
-            scale: 1.0,
-            centre_px: [0.0, 0.0],
+            ..AS_IS
         };
         let scene = over_grey(&bgr, &masks, &lines, &placement);
 
