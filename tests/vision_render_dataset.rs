@@ -224,24 +224,23 @@ fn another_folders_cables_lie_over_rendered_backgrounds_with_their_labels() {
             &out.join(format!("{stem}_mask_all.png")),
             imgcodecs::IMREAD_GRAYSCALE,
         );
+        let grown = |by_px: i32| {
+            let mut grown = Mat::default();
+            let kernel = opencv::imgproc::get_structuring_element_def(
+                opencv::imgproc::MORPH_ELLIPSE,
+                core::Size::new(2 * by_px + 1, 2 * by_px + 1),
+            )
+            .expect("kernel");
+            opencv::imgproc::dilate_def(&union, &mut grown, &kernel).expect("dilate");
+            grown
+        };
         let ring = |from_px: i32, to_px: i32| {
-            let grown = |by_px: i32| {
-                let mut grown = Mat::default();
-                let kernel = opencv::imgproc::get_structuring_element_def(
-                    opencv::imgproc::MORPH_ELLIPSE,
-                    core::Size::new(2 * by_px + 1, 2 * by_px + 1),
-                )
-                .expect("kernel");
-                opencv::imgproc::dilate_def(&union, &mut grown, &kernel).expect("dilate");
-                grown
-            };
             let mut ring = Mat::default();
             core::subtract_def(&grown(to_px), &grown(from_px), &mut ring).expect("ring");
             ring
         };
         let mut beyond = Mat::default();
-        core::bitwise_not_def(&ring(0, 24), &mut beyond).expect("beyond");
-        core::subtract_def(&beyond.clone(), &union, &mut beyond).expect("beyond");
+        core::bitwise_not_def(&grown(24), &mut beyond).expect("beyond");
         for (k, folder) in [&out, &shadowed].into_iter().enumerate() {
             let gray = read(
                 &folder.join(format!("{stem}.jpg")),

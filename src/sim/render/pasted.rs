@@ -142,14 +142,10 @@ pub fn paste_cables(
         }
     }
     let union_mask = unite(&masks, to.width, to.height)?;
-    let shadowed;
-    let background = match shadow_light {
-        Some(light) => {
-            shadowed = cast_shadows(background, &masks, light)?;
-            &shadowed
-        }
-        None => background,
-    };
+    let shadowed = shadow_light
+        .map(|light| cast_shadows(background, &masks, light))
+        .transpose()?;
+    let background = shadowed.as_ref().unwrap_or(background);
     let bgr = blend(
         background,
         &warp(photo.bgr, imgproc::INTER_LINEAR)?,
