@@ -30,6 +30,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
     let found = skeleton::paths_from_mask(
         instance_mask,
         None,
+        false,
         config.min_cable_length_px,
         JOIN_GAP_WIDTHS,
     )
@@ -54,6 +55,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
             skeleton::paths_from_mask(
                 black_box(instance_mask),
                 None,
+                false,
                 config.min_cable_length_px,
                 JOIN_GAP_WIDTHS,
             )
@@ -65,6 +67,7 @@ fn stages(c: &mut Criterion, name: &str, image: &Mat, truth_mask: Option<&Mat>) 
             skeleton::paths_from_mask(
                 black_box(instance_mask),
                 Some(image),
+                false,
                 config.min_cable_length_px,
                 JOIN_GAP_WIDTHS,
             )

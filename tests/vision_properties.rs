@@ -173,7 +173,7 @@ fn a_mask_that_fills_its_image_or_a_thin_strip_gives_no_cable() {
             by_superpixels.width_px
         );
         let by_skeleton =
-            skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
+            skeleton::paths_from_mask(&mask, None, false, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
         assert!(by_skeleton.paths.len() <= 1, "{rows}x{cols}");
     }
 }
@@ -184,7 +184,7 @@ proptest! {
     #[test]
     fn skeleton_paths_are_well_formed_on_any_mask(recipe in any_mask()) {
         let mask = recipe.draw();
-        let found = skeleton::paths_from_mask(&mask, None, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
+        let found = skeleton::paths_from_mask(&mask, None, false, MIN_LENGTH_PX, JOIN_GAP_WIDTHS).unwrap();
         prop_assert!(found.width_px.is_finite() && found.width_px >= 0.0);
         for path in &found.paths {
             prop_assert!(path.length_px >= MIN_LENGTH_PX, "{}", path.length_px);

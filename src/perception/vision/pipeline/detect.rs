@@ -265,6 +265,7 @@ impl Pipeline {
             InstanceMethod::Skeleton => skeleton::paths_from_mask(
                 mask_roi,
                 (image_roi.channels() == 3).then_some(image_roi),
+                look_alikes.painted,
                 min_length_px,
                 look_alikes.join_gap_widths(),
             )?,

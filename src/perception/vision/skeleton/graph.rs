@@ -561,7 +561,7 @@ mod tests {
         let root = merge_cheaper_crossings(&mut graph, root, width_px);
         assert_eq!(branch_counts(&graph, &root), vec![4]);
         // Each cable goes on through the crossing.
-        let partner = pair_branches(&graph, &root, None, width_px, &[]).unwrap();
+        let partner = pair_branches(&graph, &root, None, false, width_px, &[]).unwrap();
         let far_end = |branch: Branch| *graph.outward(branch).last().unwrap();
         let near = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) < 4.0;
         for (from, to) in [
@@ -575,5 +575,51 @@ mod tests {
                 far_end(partner[branch])
             );
         }
+    }
+
+    #[test]
+    fn off_paint_a_branch_is_never_paired_with_one_of_another_hue() {
+        // A black cable comes in from the left and turns down by 1.35 rad
+        // at (100, 100); a red one ends there, straight on from the black
+        // one's first leg. By shape, and with unlike colours costing at
+        // most 1 rad more, the black one would run on into the red one.
+        let (left, right, down) = (
+            [[0, 100], [100, 100]],
+            [[100, 100], [199, 100]],
+            [[100, 100], [120, 190]],
+        );
+        let mut graph = graph_of(&[left, right, down]);
+        let mut image =
+            Mat::new_rows_cols_with_default(200, 200, opencv::core::CV_8UC3, Scalar::all(200.0))
+                .unwrap();
+        for ([a, b], bgr) in [
+            (right, (40.0, 40.0, 210.0)),
+            (left, (30.0, 30.0, 30.0)),
+            (down, (30.0, 30.0, 30.0)),
+        ] {
+            let (a, b) = (Point::new(a[0], a[1]), Point::new(b[0], b[1]));
+            let colour = Scalar::new(bgr.0, bgr.1, bgr.2, 0.0);
+            imgproc::line(&mut image, a, b, colour, 7, imgproc::LINE_8, 0).unwrap();
+        }
+        let width_px = 6.0;
+        let root = graph.merge_junctions(width_px);
+        assert_eq!(branch_counts(&graph, &root), vec![3]);
+        // The far end of the branch paired with the one from the left.
+        let partner_of_left = |painted: bool| {
+            let partner =
+                pair_branches(&graph, &root, Some(&image), painted, width_px, &[]).unwrap();
+            let from_left = partner
+                .keys()
+                .find(|&&b| graph.outward(b).last().unwrap()[0] < 5.0)
+                .copied()
+                .expect("the branch from the left is paired");
+            *graph.outward(partner[&from_left]).last().unwrap()
+        };
+        let off_paint = partner_of_left(false);
+        assert!(off_paint[1] > 180.0, "{off_paint:?}");
+        // On paint a branch's colour may be the paint's: shape and the
+        // bounded colour cost decide.
+        let on_paint = partner_of_left(true);
+        assert!(on_paint[0] > 190.0, "{on_paint:?}");
     }
 }

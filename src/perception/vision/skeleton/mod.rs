@@ -17,8 +17,9 @@
 //! (merged) junction the branches are paired so that the total bending is
 //! least, each branch's direction followed back along its curve into the
 //! junction, and, given the image, pairing branches of unlike colour costs
-//! more: a cable goes on through a crossing as it bends and keeps its
-//! colour, and its path is bridged across the crossing by a cubic Hermite
+//! more (off paint, branches of unlike hues are never paired): a cable
+//! goes on through a crossing as it bends and keeps its colour, and its
+//! path is bridged across the crossing by a cubic Hermite
 //! curve; a loop's two ends are not paired with each other, since a cable
 //! that loops across itself goes on through the crossing. Walking edges
 //! and pairings from end to end gives one pixel path
@@ -60,12 +61,14 @@ const SPUR_EXTRA_PX: f64 = 4.0;
 /// end to end, of at least `min_length_px`, pieces joined across gaps of
 /// up to `join_gap_widths` cable widths (see [`JOIN_GAP_WIDTHS`]). With the
 /// BGR `image` the mask was found in (of its size), crossings also pair
-/// branches by colour.
+/// branches by colour, and never those of unlike hues unless the
+/// background is `painted`, where a branch's colour may be the paint's.
 ///
 /// [`JOIN_GAP_WIDTHS`]: super::paths::JOIN_GAP_WIDTHS
 pub fn paths_from_mask(
     mask: &Mat,
     image: Option<&Mat>,
+    painted: bool,
     min_length_px: f64,
     join_gap_widths: f64,
 ) -> Result<FoundPaths, VisionError> {
@@ -84,7 +87,7 @@ pub fn paths_from_mask(
     let shared = pairing::share_runs(&mut graph, &root, mask, width_px)?;
     // Branches per merged junction, and their least-cost pairing (bending,
     // and colour when the image is given).
-    let partner = pairing::pair_branches(&graph, &root, image, width_px, &shared)?;
+    let partner = pairing::pair_branches(&graph, &root, image, painted, width_px, &shared)?;
     let paths = walk::walk_paths(&graph, &partner, mask, width_px);
     // Superpixel walks have their own limit on turning, and their coarse
     // node-to-node polylines would read as corners here.

@@ -41,6 +41,16 @@ const COLOUR_SAME_DELTA_E: f64 = 10.0;
 /// the cost grows in proportion.
 const COLOUR_FULL_DELTA_E: f64 = 40.0;
 
+/// Chroma difference (the distance between two colours' a and b, in
+/// OpenCV's 8-bit Lab) from which two branches are never paired, off
+/// paint: a cable keeps its hue through a crossing whatever the light
+/// does to its lightness, and a tube that ends against another's side, or
+/// crosses it bending alike, would otherwise run on into it. On a painted
+/// background a branch's colour may be the paint's beside it, and unlike
+/// colours only cost [`COLOUR_COST_RAD`] (docs/vision-record.md, "Hues
+/// that part cables").
+const HUES_APART_CHROMA: f64 = 40.0;
+
 /// Cost, in radians, of two cables crossing over along a run they share
 /// (see [`pair_along_shared`]): less than a full colour difference, so
 /// that where the colours say the cables crossed, they did.
@@ -312,12 +322,15 @@ fn pairing_cost(cost: &[Vec<f64>], pairs: &[(usize, usize)]) -> f64 {
 
 /// Each junction branch's partner: at every merged junction (`root`
 /// gives each node's), its branches paired at least cost, by bending and,
-/// given the BGR `image` the mask was found in, by colour. Branches left
-/// unpaired have none: the cable ends there.
+/// given the BGR `image` the mask was found in, by colour, never across
+/// unlike hues unless the background is `painted` (see
+/// [`HUES_APART_CHROMA`]). Branches left unpaired have none: the cable
+/// ends there.
 pub(super) fn pair_branches(
     graph: &Graph,
     root: &[usize],
     image: Option<&Mat>,
+    painted: bool,
     width_px: f64,
     shared_runs: &[SharedRun],
 ) -> Result<HashMap<Branch, Branch>, VisionError> {
@@ -353,6 +366,9 @@ pub(super) fn pair_branches(
             if let Some(image) = image {
                 let colours = branch_colours_lab(&outward, image, width_px)?;
                 add_colour_costs(&mut cost, &colours);
+                if !painted {
+                    forbid_unlike_hues(&mut cost, &colours);
+                }
             }
             forbid_closing_loops(&mut cost, list);
             best_pairing(&cost)
@@ -421,6 +437,20 @@ fn colour_cost(a: Option<[f64; 3]>, b: Option<[f64; 3]>) -> f64 {
     };
     let over = (delta_e(a, b) - COLOUR_SAME_DELTA_E) / (COLOUR_FULL_DELTA_E - COLOUR_SAME_DELTA_E);
     COLOUR_COST_RAD * over.clamp(0.0, 1.0)
+}
+
+/// Forbids pairing two branches whose hues differ (see
+/// [`HUES_APART_CHROMA`]); branches of unknown colour stay free.
+fn forbid_unlike_hues(cost: &mut [Vec<f64>], colours_lab: &[Option<[f64; 3]>]) {
+    for (row, a) in cost.iter_mut().zip(colours_lab) {
+        for (c, b) in row.iter_mut().zip(colours_lab) {
+            if let (Some(a), Some(b)) = (a, b)
+                && (a[1] - b[1]).hypot(a[2] - b[2]) >= HUES_APART_CHROMA
+            {
+                *c = f64::INFINITY;
+            }
+        }
+    }
 }
 
 /// Forbids pairing a crossing's two branches that are the ends of one edge,
@@ -525,7 +555,7 @@ mod tests {
             )
             .unwrap();
         }
-        let found = paths_from_mask(&mask, None, 20.0, JOIN_GAP_WIDTHS).unwrap();
+        let found = paths_from_mask(&mask, None, false, 20.0, JOIN_GAP_WIDTHS).unwrap();
         found.paths.into_iter().map(|path| path.points_px).collect()
     }
 
@@ -635,6 +665,14 @@ mod tests {
         add_colour_costs(&mut cost, &[black, red, black]);
         assert_eq!(best_pairing(&cost), vec![(0, 2)]);
         assert!((cost[0][1] - (0.30 + COLOUR_COST_RAD)).abs() < 1e-9);
+        // Unlike hues are forbidden off paint; lightness alone is not a
+        // hue (a lit and a shaded stretch of one red cable).
+        let shaded_red = Some([60.0, 180.0, 160.0]);
+        let mut cost = bends();
+        forbid_unlike_hues(&mut cost, &[red, black, shaded_red]);
+        assert_eq!(cost[0][1], f64::INFINITY);
+        assert_eq!(cost[0][2], 0.35);
+        assert_eq!(cost[1][2], f64::INFINITY);
         // A shading difference, or a branch of unknown colour, costs
         // nothing: shape decides.
         for colours in [[black, shaded_black, black], [black, None, black]] {
