@@ -617,8 +617,8 @@ mod tests {
         };
         let off_paint = partner_of_left(false);
         assert!(off_paint[1] > 180.0, "{off_paint:?}");
-        // On paint a branch's colour may be the paint's: shape and the
-        // bounded colour cost decide.
+        // On paint, where one cable's branches can read as far apart in
+        // hue, shape and the bounded colour cost decide.
         let on_paint = partner_of_left(true);
         assert!(on_paint[0] > 190.0, "{on_paint:?}");
     }

@@ -62,7 +62,8 @@ const SPUR_EXTRA_PX: f64 = 4.0;
 /// up to `join_gap_widths` cable widths (see [`JOIN_GAP_WIDTHS`]). With the
 /// BGR `image` the mask was found in (of its size), crossings also pair
 /// branches by colour, and never those of unlike hues unless the
-/// background is `painted`, where a branch's colour may be the paint's.
+/// background is `painted`, where one cable's branches can read as far
+/// apart.
 ///
 /// [`JOIN_GAP_WIDTHS`]: super::paths::JOIN_GAP_WIDTHS
 pub fn paths_from_mask(

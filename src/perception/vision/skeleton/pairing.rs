@@ -45,10 +45,10 @@ const COLOUR_FULL_DELTA_E: f64 = 40.0;
 /// OpenCV's 8-bit Lab) from which two branches are never paired, off
 /// paint: a cable keeps its hue through a crossing whatever the light
 /// does to its lightness, and a tube that ends against another's side, or
-/// crosses it bending alike, would otherwise run on into it. On a painted
-/// background a branch's colour may be the paint's beside it, and unlike
-/// colours only cost [`COLOUR_COST_RAD`] (docs/vision-record.md, "Hues
-/// that part cables").
+/// crosses it bending alike, would otherwise run on into it. Over paint
+/// one cable's branches can read that far apart, even given its labelled
+/// mask, so there unlike colours only cost [`COLOUR_COST_RAD`]
+/// (docs/vision-record.md, "Hues that part cables").
 const HUES_APART_CHROMA: f64 = 40.0;
 
 /// Cost, in radians, of two cables crossing over along a run they share
